@@ -1,0 +1,596 @@
+//! `subsurface kernel` and `subsurface profile`: the no-GPU side of the tool,
+//! printing blur kernels, Gaussian fits of diffusion profiles and their plots.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use anyhow::{Result, anyhow, bail};
+use plotters::prelude::*;
+use subsurface_profile::{
+    DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GaussianFit, KernelParams, Material,
+    ProfileError, SumOfGaussians, material, separable_kernel, separable_kernel_for,
+    separable_range_for,
+};
+
+/// Bundled so plot text renders the same everywhere (Bitstream Vera licence,
+/// see assets/fonts/DejaVuSans-LICENSE.txt).
+static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+
+/// Print the separable subsurface-scattering blur kernel (Jimenez et al. 2015).
+#[derive(Debug, Clone, clap::Args)]
+#[command(
+    after_help = "Each tap is [r, g, b, offset_mm]; the centre tap (offset 0) comes first, \
+the others follow in increasing offset. Channels sum to 1. The shader scales offsets by the \
+on-screen size of a millimetre."
+)]
+pub struct KernelArgs {
+    /// Number of taps: odd, from 3 to 63. Offsets reach 2 mm up to 19 taps and 3 mm above.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SAMPLES)]
+    pub samples: u32,
+
+    /// Per-channel share of light that is scattered, each in 0..=1, as "R,G,B" or one value
+    /// for all channels. 0 keeps the pixel sharp. [default: 0.48,0.41,0.28, or 1,1,1 with --material]
+    #[arg(long, value_name = "R,G,B")]
+    pub strength: Option<String>,
+
+    /// Per-channel width factor, each >= 0, as "R,G,B" or one value: the profile radius is
+    /// divided by 0.001 + falloff, so smaller values blur that channel less.
+    /// [default: 1.0,0.37,0.3, or 1,1,1 with --material]
+    #[arg(long, value_name = "R,G,B")]
+    pub falloff: Option<String>,
+
+    /// Build the kernel from this material's Gaussian fit (all of its terms, per-channel weights)
+    /// instead of the skin profile of Separable SSS. See `subsurface profile --help` for names.
+    #[arg(long, value_name = "NAME")]
+    pub material: Option<String>,
+
+    /// Gaussians to fit to --material (1 to 12).
+    #[arg(long, value_name = "K", default_value_t = 6, requires = "material")]
+    pub gaussians: usize,
+
+    /// Print the kernel as JSON, [[r, g, b, offset_mm], ...], instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Show a material's diffusion profile R(r), its sum-of-Gaussians fit and the transmittance T(s).
+#[derive(Debug, Clone, clap::Args)]
+#[command(
+    after_help = "Materials: \"skin\" is d'Eon's six-Gaussian skin profile; the others use \
+the dipole of Jensen et al. 2001 with their measured coefficients (mm^-1) and eta 1.3: apple, \
+chicken1, chicken2, cream, ketchup, marble, potato, skimmilk, skin1, skin2, wholemilk."
+)]
+pub struct ProfileArgs {
+    /// Material preset; case, spaces, '-' and '_' are ignored ("whole milk").
+    #[arg(long, value_name = "NAME", default_value = "skin")]
+    pub material: String,
+
+    /// Number of Gaussians to fit (1 to 12).
+    #[arg(long, value_name = "K", default_value_t = 6)]
+    pub gaussians: usize,
+
+    /// Treat the material as a slab this thick (mm), using the multipole of Donner and Jensen
+    /// 2005 instead of the semi-infinite dipole. Not available for "skin".
+    #[arg(long, value_name = "MM")]
+    pub thickness: Option<f64>,
+
+    /// Also draw R(r) (log scale) with its fit and T(s), per channel, into this PNG file.
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
+
+    /// Print the fit as JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Prefixes a library error, whose message starts with the field name, with `--`.
+fn flag_error(e: ProfileError) -> anyhow::Error {
+    anyhow!("--{e}")
+}
+
+/// Parses "R,G,B" (or a single value for all three) for `--flag`.
+fn parse_rgb(flag: &str, text: &str) -> Result<[f32; 3]> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let values: Vec<f32> = parts
+        .iter()
+        .map(|p| p.parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow!("--{flag}: expected R,G,B or one number (got {text:?})"))?;
+    match values[..] {
+        [v] => Ok([v; 3]),
+        [r, g, b] => Ok([r, g, b]),
+        _ => bail!("--{flag}: expected R,G,B or one number (got {text:?})"),
+    }
+}
+
+fn load_material(name: &str, thickness: Option<f64>) -> Result<Material> {
+    let m = material(name).map_err(flag_error)?;
+    match thickness {
+        None => Ok(m),
+        Some(t) => m.with_thickness(t).map_err(|e| {
+            anyhow!(
+                "--thickness: {}",
+                e.to_string().trim_start_matches("thickness_mm: ")
+            )
+        }),
+    }
+}
+
+fn fit_material(m: &Material, k: usize) -> Result<GaussianFit> {
+    m.fit(k).map_err(|e| match e {
+        ProfileError::Count { ref field, .. } if field == "gaussians" => flag_error(e),
+        other => anyhow!("--material {}: {other}", m.name()),
+    })
+}
+
+/// Builds the kernel `args` ask for.
+pub fn build_kernel(args: &KernelArgs) -> Result<Vec<[f32; 4]>> {
+    let (strength0, falloff0) = match args.material {
+        None => (DEFAULT_STRENGTH, DEFAULT_FALLOFF),
+        Some(_) => ([1.0; 3], [1.0; 3]),
+    };
+    let strength = match &args.strength {
+        Some(s) => parse_rgb("strength", s)?,
+        None => strength0,
+    };
+    let falloff = match &args.falloff {
+        Some(s) => parse_rgb("falloff", s)?,
+        None => falloff0,
+    };
+    let params = KernelParams {
+        samples: args.samples,
+        strength,
+        falloff,
+    };
+    params.validate().map_err(flag_error)?;
+    match &args.material {
+        None => separable_kernel(&params).map_err(flag_error),
+        Some(name) => {
+            let fit = fit_material(&load_material(name, None)?, args.gaussians)?;
+            let range = separable_range_for(&fit.profile, args.samples);
+            separable_kernel_for(&fit.profile, &params, range).map_err(flag_error)
+        }
+    }
+}
+
+/// `subsurface kernel`.
+pub fn run_kernel(args: &KernelArgs) -> Result<()> {
+    let kernel = build_kernel(args)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&kernel)?);
+    } else {
+        println!(
+            "{:>4} {:>11} {:>10} {:>10} {:>10}",
+            "tap", "offset_mm", "r", "g", "b"
+        );
+        for (i, t) in kernel.iter().enumerate() {
+            println!(
+                "{i:>4} {:>11.5} {:>10.6} {:>10.6} {:>10.6}",
+                t[3], t[0], t[1], t[2]
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Text description of the material's physical parameters.
+fn describe_material(m: &Material) -> String {
+    let mut out = String::new();
+    let rgb = |v: [f64; 3]| format!("{:>10.5} {:>10.5} {:>10.5}", v[0], v[1], v[2]);
+    let dipole = match m {
+        Material::Gaussians { profile, .. } => {
+            out += &format!(
+                "material: {} (sum of {} Gaussians, d'Eon's skin profile; no dipole parameters)\n",
+                m.name(),
+                profile.terms().len()
+            );
+            None
+        }
+        Material::Dipole { dipole, .. } => {
+            out += &format!("material: {} (dipole, Jensen et al. 2001)\n", m.name());
+            Some(*dipole)
+        }
+        Material::Multipole { multipole, .. } => {
+            out += &format!(
+                "material: {} (multipole slab, Donner and Jensen 2005: thickness {} mm, {} dipoles)\n",
+                m.name(),
+                multipole.thickness_mm,
+                2 * multipole.pairs + 1
+            );
+            Some(multipole.dipole)
+        }
+    };
+    if let Some(d) = dipole {
+        let ch = [0, 1, 2].map(|c| d.channel(c));
+        out += &format!("{:<28} {:>10} {:>10} {:>10}\n", "", "R", "G", "B");
+        out += &format!("{:<28} {}\n", "sigma_a (1/mm)", rgb(d.sigma_a));
+        out += &format!("{:<28} {}\n", "sigma_s' (1/mm)", rgb(d.sigma_s_prime));
+        out += &format!(
+            "{:<28} {}\n",
+            "sigma_t' (1/mm)",
+            rgb(ch.map(|c| c.sigma_t_prime))
+        );
+        out += &format!(
+            "{:<28} {}\n",
+            "reduced albedo alpha'",
+            rgb(ch.map(|c| c.alpha_prime))
+        );
+        out += &format!(
+            "{:<28} {}\n",
+            "sigma_tr (1/mm)",
+            rgb(ch.map(|c| c.sigma_tr))
+        );
+        out += &format!("{:<28} {}\n", "z_r (mm)", rgb(ch.map(|c| c.z_r)));
+        out += &format!("{:<28} {}\n", "z_v (mm)", rgb(ch.map(|c| c.z_v)));
+        out += &format!("eta {}  A {:.5}\n", d.eta, d.boundary_a());
+    }
+    if let Material::Multipole { multipole, .. } = m {
+        out += &format!(
+            "{:<28} {}\n",
+            "total transmittance",
+            rgb(multipole.total_transmittance())
+        );
+    }
+    out += &format!(
+        "{:<28} {}\n",
+        "total diffuse reflectance",
+        rgb(m.total_reflectance())
+    );
+    out
+}
+
+fn describe_fit(fit: &GaussianFit) -> String {
+    let e = fit.rel_l2_error;
+    let mut out = format!(
+        "fit: {} Gaussians to r*R(r) over 0..{:.3} mm, relative L2 error R {:.3e} G {:.3e} B {:.3e}\n",
+        fit.profile.terms().len(),
+        fit.r_max_mm,
+        e[0],
+        e[1],
+        e[2]
+    );
+    out += &format!(
+        "{:>14} {:>10} {:>10} {:>10}\n",
+        "variance_mm2", "w_r", "w_g", "w_b"
+    );
+    for t in fit.profile.terms() {
+        out += &format!(
+            "{:>14.6} {:>10.6} {:>10.6} {:>10.6}\n",
+            t.variance, t.weight[0], t.weight[1], t.weight[2]
+        );
+    }
+    let w = fit.profile.total_weight();
+    out += &format!(
+        "{:>14} {:>10.6} {:>10.6} {:>10.6}\n",
+        "sum", w[0], w[1], w[2]
+    );
+    out
+}
+
+/// `subsurface profile`.
+pub fn run_profile(args: &ProfileArgs) -> Result<()> {
+    let plot = args.plot.as_deref().map(check_plot_path).transpose()?;
+    let m = load_material(&args.material, args.thickness)?;
+    let fit = fit_material(&m, args.gaussians)?;
+    if args.json {
+        let json = serde_json::json!({
+            "material": m,
+            "total_reflectance": m.total_reflectance(),
+            "fit": fit,
+        });
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    } else {
+        print!("{}", describe_material(&m));
+        print!("{}", describe_fit(&fit));
+    }
+    if let Some(path) = plot {
+        write_plot(&path, &m, &fit)?;
+        if !args.json {
+            println!("plot: {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+fn check_plot_path(path: &Path) -> Result<PathBuf> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !ok || path.file_name().is_none() {
+        bail!(
+            "--plot: file name must end in .png (got {})",
+            path.display()
+        );
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!("--plot: directory {} does not exist", dir.display());
+    }
+    Ok(path.to_path_buf())
+}
+
+const PLOT_SIZE: (u32, u32) = (1400, 560);
+
+/// Renders to memory, writes a temporary file beside `path` and renames it, so
+/// a failure never leaves a partial PNG behind.
+fn write_plot(path: &Path, m: &Material, fit: &GaussianFit) -> Result<()> {
+    let (w, h) = PLOT_SIZE;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    draw_plot(&mut buf, m, fit).map_err(|e| anyhow!("--plot: drawing failed: {e}"))?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().expect("checked").to_string_lossy();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = image::save_buffer_with_format(
+        &tmp,
+        &buf,
+        w,
+        h,
+        image::ColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(anyhow::Error::from)
+    .and_then(|()| std::fs::rename(&tmp, path).map_err(anyhow::Error::from));
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(anyhow!("--plot: cannot write {}: {e}", path.display()));
+    }
+    Ok(())
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Only fails for a malformed font, which the bundled file is not.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+const CHANNEL_COLORS: [RGBColor; 3] = [
+    RGBColor(220, 40, 30),
+    RGBColor(30, 160, 50),
+    RGBColor(40, 70, 220),
+];
+const CHANNEL_NAMES: [&str; 3] = ["R", "G", "B"];
+
+fn draw_plot(
+    buf: &mut [u8],
+    m: &Material,
+    fit: &GaussianFit,
+) -> Result<(), Box<dyn std::error::Error>> {
+    register_font();
+    let root = BitMapBackend::with_buffer(buf, PLOT_SIZE).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(PLOT_SIZE.0 / 2);
+
+    // Left: R(r) and the fit on a log axis, over the fitted range.
+    let r_max = fit.r_max_mm;
+    let n = 400;
+    let rs: Vec<f64> = (0..=n).map(|i| r_max * i as f64 / n as f64).collect();
+    let exact: Vec<[f64; 3]> = rs.iter().map(|&r| m.profile(r)).collect();
+    let fitted: Vec<[f64; 3]> = rs.iter().map(|&r| fit.profile.eval(r)).collect();
+    let y_max = exact
+        .iter()
+        .flat_map(|v| v.iter().copied())
+        .fold(0.0, f64::max)
+        .max(1e-12)
+        * 2.0;
+    let y_min = y_max * 1e-7;
+    let mut chart = ChartBuilder::on(&left)
+        .caption(
+            format!(
+                "{}: R(r) (solid) and {}-Gaussian fit (dashed)",
+                m.name(),
+                fit.profile.terms().len()
+            ),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..r_max, (y_min..y_max).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("r (mm)")
+        .y_desc("R(r) (1/mm^2)")
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    for c in 0..3 {
+        let color = CHANNEL_COLORS[c];
+        let clamp = |v: f64| v.max(y_min);
+        chart
+            .draw_series(LineSeries::new(
+                rs.iter().zip(&exact).map(|(&r, v)| (r, clamp(v[c]))),
+                color.stroke_width(2),
+            ))?
+            .label(format!("{} profile", CHANNEL_NAMES[c]))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart.draw_series(DashedLineSeries::new(
+            rs.iter().zip(&fitted).map(|(&r, v)| (r, clamp(v[c]))),
+            8,
+            5,
+            color.stroke_width(2),
+        ))?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+
+    // Right: T(s) of the fit, normalised so T(0) = 1 as the skin shader uses it.
+    let t_profile: SumOfGaussians = fit
+        .profile
+        .normalized()
+        .unwrap_or_else(|_| fit.profile.clone());
+    let v_max = t_profile
+        .terms()
+        .iter()
+        .map(|t| t.variance)
+        .fold(0.0, f64::max);
+    let s_max = (2.5 * v_max.sqrt()).clamp(1.0, r_max.max(1.0));
+    let ss: Vec<f64> = (0..=n).map(|i| s_max * i as f64 / n as f64).collect();
+    let mut chart = ChartBuilder::on(&right)
+        .caption(
+            "transmittance T(s) of the fit, T(0) = 1",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..s_max, 0.0..1.05)?;
+    chart
+        .configure_mesh()
+        .x_desc("thickness s (mm)")
+        .y_desc("T(s)")
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    for c in 0..3 {
+        let color = CHANNEL_COLORS[c];
+        chart
+            .draw_series(LineSeries::new(
+                ss.iter().map(|&s| (s, t_profile.transmittance(s)[c])),
+                color.stroke_width(2),
+            ))?
+            .label(CHANNEL_NAMES[c])
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kernel_args(samples: u32) -> KernelArgs {
+        KernelArgs {
+            samples,
+            strength: None,
+            falloff: None,
+            material: None,
+            gaussians: 6,
+            json: true,
+        }
+    }
+
+    #[test]
+    fn kernel_defaults_match_the_library() {
+        let k = build_kernel(&kernel_args(17)).unwrap();
+        assert_eq!(k, separable_kernel(&KernelParams::default()).unwrap());
+        assert_eq!(k[0][3], 0.0);
+        let json = serde_json::to_string(&k).unwrap();
+        let back: Vec<[f32; 4]> = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, k);
+    }
+
+    #[test]
+    fn kernel_flags_are_parsed_and_checked() {
+        let mut a = kernel_args(9);
+        a.strength = Some("1, 1,1".into());
+        a.falloff = Some("0.5".into());
+        let k = build_kernel(&a).unwrap();
+        let s: f32 = k.iter().map(|t| t[1]).sum();
+        assert!((s - 1.0).abs() < 1e-5);
+
+        let e = build_kernel(&kernel_args(4)).unwrap_err().to_string();
+        assert_eq!(e, "--samples: must be odd and in 3..=63 (got 4)");
+        a.strength = Some("1,2".into());
+        let e = build_kernel(&a).unwrap_err().to_string();
+        assert!(e.starts_with("--strength: expected R,G,B"), "{e}");
+        a.strength = Some("0.5,1.5,0.5".into());
+        let e = build_kernel(&a).unwrap_err().to_string();
+        assert!(e.starts_with("--strength.g: must be in 0..=1"), "{e}");
+        a.strength = None;
+        a.falloff = Some("nan,1,1".into());
+        assert!(
+            build_kernel(&a)
+                .unwrap_err()
+                .to_string()
+                .starts_with("--falloff.r: ")
+        );
+    }
+
+    #[test]
+    fn material_kernel_and_bad_material() {
+        let mut a = kernel_args(11);
+        a.material = Some("skin".into());
+        let k = build_kernel(&a).unwrap();
+        assert_eq!(k.len(), 11);
+        a.material = Some("granite".into());
+        let e = build_kernel(&a).unwrap_err().to_string();
+        assert!(e.starts_with("--material: unknown name"), "{e}");
+        assert!(!e.contains('\n'));
+    }
+
+    #[test]
+    fn profile_bad_flags_are_one_line_errors() {
+        let args = |material: &str,
+                    gaussians: usize,
+                    thickness: Option<f64>,
+                    plot: Option<&str>| ProfileArgs {
+            material: material.into(),
+            gaussians,
+            thickness,
+            plot: plot.map(PathBuf::from),
+            json: false,
+        };
+        let e = run_profile(&args("skin", 0, None, None))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("--gaussians: "), "{e}");
+        let e = run_profile(&args("skin", 6, Some(2.0), None))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("--thickness: "), "{e}");
+        let e = run_profile(&args("marble", 6, Some(-1.0), None))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("--thickness: must be > 0"), "{e}");
+        let e = run_profile(&args("skin", 6, None, Some("out.jpg")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("--plot: "), "{e}");
+    }
+
+    #[test]
+    fn plot_is_written_atomically() {
+        let dir = std::env::temp_dir().join(format!("subsurface-plot-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("skin.png");
+        let m = material("skin").unwrap();
+        let fit = m.fit(6).unwrap();
+        write_plot(&path, &m, &fit).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        let img = image::open(&path).unwrap();
+        assert_eq!((img.width(), img.height()), PLOT_SIZE);
+        // Only the final file is left.
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        // A missing directory fails without leaving anything behind.
+        let bad = dir.join("missing").join("x.png");
+        let e = write_plot(&bad, &m, &fit).unwrap_err().to_string();
+        assert!(e.starts_with("--plot: cannot write"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

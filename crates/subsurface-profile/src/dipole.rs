@@ -1,0 +1,390 @@
+//! Physically based diffusion profiles: the dipole of Jensen et al. 2001 for a
+//! semi-infinite medium and the multipole of Donner and Jensen 2005 for a slab.
+//!
+//! Units: coefficients in mm^-1, distances in mm, profiles in mm^-2.
+
+use std::f64::consts::PI;
+
+use serde::Serialize;
+
+use crate::error::{CHANNELS, Result, count, in_range, positive};
+use crate::gaussian::bisect;
+
+/// Diffuse Fresnel reflectance `F_dr` of a boundary with relative index `eta`,
+/// the polynomial fit Jensen et al. 2001 use (valid for eta >= 1).
+pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
+    -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
+}
+
+/// Derived per-channel quantities of the diffusion approximation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DiffusionChannel {
+    /// Reduced extinction `sigma_t' = sigma_a + sigma_s'`.
+    pub sigma_t_prime: f64,
+    /// Reduced albedo `alpha' = sigma_s' / sigma_t'`.
+    pub alpha_prime: f64,
+    /// Effective transport coefficient `sigma_tr = sqrt(3 sigma_a sigma_t')`.
+    pub sigma_tr: f64,
+    /// Depth of the real source, one mean free path: `z_r = 1 / sigma_t'`.
+    pub z_r: f64,
+    /// Height of the extrapolated boundary above the surface, `z_b = 2 A D` with
+    /// `D = 1 / (3 sigma_t')`.
+    pub z_b: f64,
+    /// Height of the dipole's virtual source above the surface, `z_v = z_r + 2 z_b`
+    /// (= `z_r (1 + 4A/3)` in Jensen 2001).
+    pub z_v: f64,
+}
+
+/// Material coefficients shared by the dipole and multipole.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Dipole {
+    /// Absorption coefficient per channel, mm^-1, > 0.
+    pub sigma_a: [f64; 3],
+    /// Reduced scattering coefficient per channel, mm^-1, > 0.
+    pub sigma_s_prime: [f64; 3],
+    /// Relative index of refraction, >= 1.
+    pub eta: f64,
+}
+
+/// Signed energy of one pole term `z (1 + s d) e^{-s d} / (4 pi d^3)`,
+/// `d = sqrt(r^2 + z^2)`, integrated over the disc of radius `rho`:
+/// `sign(z) / 2 * (e^{-s|z|} - |z| e^{-s D} / D)` with `D = sqrt(rho^2 + z^2)`.
+/// (The antiderivative of `(1 + s d) e^{-s d} / d^2` is `-e^{-s d} / d`.)
+fn pole_energy(z: f64, s: f64, rho: f64) -> f64 {
+    let a = z.abs();
+    if a == 0.0 {
+        return 0.0;
+    }
+    let big_d = (rho * rho + z * z).sqrt();
+    let tail = if rho.is_infinite() {
+        0.0
+    } else {
+        a * (-s * big_d).exp() / big_d
+    };
+    z.signum() * 0.5 * ((-s * a).exp() - tail)
+}
+
+/// One pole term of the profile, `z (1 + s d) e^{-s d} / (4 pi d^3)`.
+fn pole(z: f64, s: f64, r: f64) -> f64 {
+    if z == 0.0 {
+        return 0.0;
+    }
+    let d = (r * r + z * z).sqrt();
+    z * (1.0 + s * d) * (-s * d).exp() / (4.0 * PI * d * d * d)
+}
+
+impl Dipole {
+    /// Validates: every sigma finite and > 0, `eta` finite and in 1..=10.
+    pub fn new(sigma_a: [f64; 3], sigma_s_prime: [f64; 3], eta: f64) -> Result<Self> {
+        for c in 0..3 {
+            positive(&format!("sigma_a.{}", CHANNELS[c]), sigma_a[c])?;
+            positive(&format!("sigma_s_prime.{}", CHANNELS[c]), sigma_s_prime[c])?;
+        }
+        in_range("eta", eta, 1.0, 10.0)?;
+        Ok(Self {
+            sigma_a,
+            sigma_s_prime,
+            eta,
+        })
+    }
+
+    /// `A = (1 + F_dr) / (1 - F_dr)`, the boundary mismatch term.
+    pub fn boundary_a(&self) -> f64 {
+        let fdr = fresnel_diffuse_reflectance(self.eta);
+        (1.0 + fdr) / (1.0 - fdr)
+    }
+
+    /// Derived quantities for channel `c` (0..3).
+    pub fn channel(&self, c: usize) -> DiffusionChannel {
+        let sigma_t_prime = self.sigma_a[c] + self.sigma_s_prime[c];
+        let z_r = 1.0 / sigma_t_prime;
+        let z_b = 2.0 * self.boundary_a() / (3.0 * sigma_t_prime);
+        DiffusionChannel {
+            sigma_t_prime,
+            alpha_prime: self.sigma_s_prime[c] / sigma_t_prime,
+            sigma_tr: (3.0 * self.sigma_a[c] * sigma_t_prime).sqrt(),
+            z_r,
+            z_b,
+            z_v: z_r + 2.0 * z_b,
+        }
+    }
+
+    /// Diffuse reflectance profile `R_d(r)` (Jensen 2001, eq. 4 with the
+    /// virtual source above the surface).
+    pub fn reflectance(&self, r_mm: f64) -> [f64; 3] {
+        [0, 1, 2].map(|c| {
+            let ch = self.channel(c);
+            ch.alpha_prime * (pole(ch.z_r, ch.sigma_tr, r_mm) + pole(ch.z_v, ch.sigma_tr, r_mm))
+        })
+    }
+
+    /// Total diffuse reflectance in closed form (Jensen 2001):
+    /// `alpha'/2 (1 + exp(-4/3 A sqrt(3 (1 - alpha')))) exp(-sqrt(3 (1 - alpha')))`.
+    pub fn total_reflectance(&self) -> [f64; 3] {
+        let a = self.boundary_a();
+        [0, 1, 2].map(|c| {
+            let alpha = self.channel(c).alpha_prime;
+            let k = (3.0 * (1.0 - alpha)).sqrt();
+            0.5 * alpha * (1.0 + (-4.0 / 3.0 * a * k).exp()) * (-k).exp()
+        })
+    }
+
+    /// Radius (mm) inside which every channel holds `fraction` of its total
+    /// reflectance (exact disc energies, bisection).
+    pub fn energy_radius_mm(&self, fraction: f64) -> f64 {
+        let hi = (0..3)
+            .map(|c| {
+                let ch = self.channel(c);
+                50.0 / ch.sigma_tr + 50.0 * ch.z_v
+            })
+            .fold(0.0, f64::max);
+        (0..3)
+            .map(|c| {
+                let ch = self.channel(c);
+                let inside = |rho: f64| {
+                    pole_energy(ch.z_r, ch.sigma_tr, rho) + pole_energy(ch.z_v, ch.sigma_tr, rho)
+                };
+                let total = inside(f64::INFINITY);
+                bisect(|rho| inside(rho) / total - fraction, 0.0, hi)
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Donner and Jensen 2005's multipole: a slab of finite `thickness_mm`, both faces
+/// with the same `eta`, approximated by `2 * pairs + 1` dipoles mirrored about
+/// the two extrapolated boundaries.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Multipole {
+    pub dipole: Dipole,
+    /// Slab thickness `d` in mm, > 0.
+    pub thickness_mm: f64,
+    /// Dipole pairs on each side of the central one (`i = -pairs..=pairs`).
+    pub pairs: u32,
+}
+
+impl Multipole {
+    /// Default `pairs`: beyond it the extra poles sit more than 20 slab
+    /// thicknesses away and change the profile negligibly for thin slabs.
+    pub const DEFAULT_PAIRS: u32 = 20;
+
+    /// Validates `thickness_mm` (finite, > 0) and `pairs` (0..=1000).
+    pub fn new(dipole: Dipole, thickness_mm: f64, pairs: u32) -> Result<Self> {
+        positive("thickness_mm", thickness_mm)?;
+        count("pairs", pairs as usize, 0, 1000)?;
+        Ok(Self {
+            dipole,
+            thickness_mm,
+            pairs,
+        })
+    }
+
+    /// Depths of real and virtual source of pair `i` for channel `ch`:
+    /// `z_r,i = 2i (d + 2 z_b) + z_r`, `z_v,i = 2i (d + 2 z_b) - z_r - 2 z_b`
+    /// (Donner and Jensen 2005; i = 0 is the classic dipole).
+    fn poles(&self, ch: &DiffusionChannel) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let n = self.pairs as i64;
+        let period = 2.0 * (self.thickness_mm + 2.0 * ch.z_b);
+        let (z_r, z_b) = (ch.z_r, ch.z_b);
+        (-n..=n).map(move |i| {
+            let shift = i as f64 * period;
+            (shift + z_r, shift - z_r - 2.0 * z_b)
+        })
+    }
+
+    /// Reflectance profile `R(r)` of the slab.
+    pub fn reflectance(&self, r_mm: f64) -> [f64; 3] {
+        [0, 1, 2].map(|c| {
+            let ch = self.dipole.channel(c);
+            ch.alpha_prime
+                * self
+                    .poles(&ch)
+                    .map(|(zr, zv)| pole(zr, ch.sigma_tr, r_mm) - pole(zv, ch.sigma_tr, r_mm))
+                    .sum::<f64>()
+        })
+    }
+
+    /// Transmittance profile `T(r)` through the slab (distance `r` measured on
+    /// the far face from the point below the entry point).
+    pub fn transmittance(&self, r_mm: f64) -> [f64; 3] {
+        let d = self.thickness_mm;
+        [0, 1, 2].map(|c| {
+            let ch = self.dipole.channel(c);
+            ch.alpha_prime
+                * self
+                    .poles(&ch)
+                    .map(|(zr, zv)| {
+                        pole(d - zr, ch.sigma_tr, r_mm) - pole(d - zv, ch.sigma_tr, r_mm)
+                    })
+                    .sum::<f64>()
+        })
+    }
+
+    /// Total reflectance, in closed form per pole (see [`Dipole`]'s derivation).
+    pub fn total_reflectance(&self) -> [f64; 3] {
+        self.reflected_energy(f64::INFINITY)
+    }
+
+    /// Total transmittance, in closed form per pole.
+    pub fn total_transmittance(&self) -> [f64; 3] {
+        let d = self.thickness_mm;
+        [0, 1, 2].map(|c| {
+            let ch = self.dipole.channel(c);
+            ch.alpha_prime
+                * self
+                    .poles(&ch)
+                    .map(|(zr, zv)| {
+                        pole_energy(d - zr, ch.sigma_tr, f64::INFINITY)
+                            - pole_energy(d - zv, ch.sigma_tr, f64::INFINITY)
+                    })
+                    .sum::<f64>()
+        })
+    }
+
+    fn reflected_energy(&self, rho: f64) -> [f64; 3] {
+        [0, 1, 2].map(|c| {
+            let ch = self.dipole.channel(c);
+            ch.alpha_prime
+                * self
+                    .poles(&ch)
+                    .map(|(zr, zv)| {
+                        pole_energy(zr, ch.sigma_tr, rho) - pole_energy(zv, ch.sigma_tr, rho)
+                    })
+                    .sum::<f64>()
+        })
+    }
+
+    /// Radius (mm) inside which every channel holds `fraction` of its total
+    /// reflectance.
+    pub fn energy_radius_mm(&self, fraction: f64) -> f64 {
+        let hi = self.dipole.energy_radius_mm(0.999_999) * 4.0;
+        let total = self.total_reflectance();
+        (0..3)
+            .filter(|&c| total[c] > 0.0)
+            .map(|c| {
+                bisect(
+                    |rho| self.reflected_energy(rho)[c] / total[c] - fraction,
+                    0.0,
+                    hi,
+                )
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gaussian::simpson;
+
+    fn integrate_plane(f: impl Fn(f64) -> f64, r_max: f64) -> f64 {
+        // Substitute r = u^2 to resolve the peak at the origin.
+        let u_max = r_max.sqrt();
+        simpson(
+            |u| 2.0 * PI * u * u * f(u * u) * 2.0 * u,
+            0.0,
+            u_max,
+            400_000,
+        )
+    }
+
+    fn marble() -> Dipole {
+        Dipole::new([0.0021, 0.0041, 0.0071], [2.19, 2.62, 3.00], 1.3).unwrap()
+    }
+
+    fn skin1() -> Dipole {
+        Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap()
+    }
+
+    #[test]
+    fn dipole_integral_matches_jensen_closed_form() {
+        for d in [marble(), skin1()] {
+            let closed = d.total_reflectance();
+            let r_max = d.energy_radius_mm(1.0 - 1e-9);
+            for c in 0..3 {
+                let numeric = integrate_plane(|r| d.reflectance(r)[c], r_max);
+                assert!(
+                    (numeric - closed[c]).abs() < 1e-6 * closed[c].max(1e-3),
+                    "channel {c}: numeric {numeric} closed {}",
+                    closed[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn jensen_closed_form_hand_value() {
+        // Skin1 red by hand: alpha' = 0.74 / 0.772, F_dr(1.3) = 0.44480, A = 2.6026.
+        let rd = skin1().total_reflectance()[0];
+        assert!((rd - 0.4361).abs() < 5e-4, "{rd}");
+        assert!((fresnel_diffuse_reflectance(1.0) - 0.0016).abs() < 1e-12);
+    }
+
+    #[test]
+    fn thick_multipole_is_the_dipole() {
+        let d = skin1();
+        let m0 = Multipole::new(d, 1e6, 0).unwrap();
+        let m = Multipole::new(d, 1e6, 5).unwrap();
+        for r in [0.0, 0.1, 1.0, 5.0] {
+            let (a, b, c) = (d.reflectance(r), m0.reflectance(r), m.reflectance(r));
+            for k in 0..3 {
+                assert!(
+                    (a[k] - b[k]).abs() <= 1e-12 * a[k].abs().max(1e-30),
+                    "r {r}"
+                );
+                assert!((a[k] - c[k]).abs() <= 1e-9 * a[k].abs().max(1e-30), "r {r}");
+            }
+        }
+        let (a, b) = (d.total_reflectance(), m.total_reflectance());
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn thin_slab_reflects_less_and_transmits() {
+        let d = marble();
+        let m = Multipole::new(d, 2.0, Multipole::DEFAULT_PAIRS).unwrap();
+        let (rd, rm, tm) = (
+            d.total_reflectance(),
+            m.total_reflectance(),
+            m.total_transmittance(),
+        );
+        for c in 0..3 {
+            assert!(rm[c] < rd[c], "channel {c}");
+            assert!(tm[c] > 0.05, "channel {c}: {}", tm[c]);
+            // Energy cannot exceed the albedo-limited budget.
+            assert!(rm[c] + tm[c] < 1.0);
+            // The closed forms match numeric integration of the profiles.
+            let r_max = 400.0;
+            let nr = integrate_plane(|r| m.reflectance(r)[c], r_max);
+            let nt = integrate_plane(|r| m.transmittance(r)[c], r_max);
+            assert!(
+                (nr - rm[c]).abs() < 1e-5,
+                "R channel {c}: {nr} vs {}",
+                rm[c]
+            );
+            assert!(
+                (nt - tm[c]).abs() < 1e-5,
+                "T channel {c}: {nt} vs {}",
+                tm[c]
+            );
+        }
+    }
+
+    #[test]
+    fn bad_coefficients_are_errors() {
+        let e = Dipole::new([0.1, 0.0, 0.1], [1.0; 3], 1.3).unwrap_err();
+        assert!(e.to_string().starts_with("sigma_a.g: must be > 0"), "{e}");
+        let e = Dipole::new([0.1; 3], [1.0, 1.0, -2.0], 1.3).unwrap_err();
+        assert!(
+            e.to_string().starts_with("sigma_s_prime.b: must be > 0"),
+            "{e}"
+        );
+        let e = Dipole::new([0.1; 3], [1.0; 3], 0.9).unwrap_err();
+        assert!(e.to_string().starts_with("eta: "), "{e}");
+        assert!(Dipole::new([0.1; 3], [f64::INFINITY; 3], 1.3).is_err());
+        let e = Multipole::new(skin1(), -1.0, 3).unwrap_err();
+        assert!(e.to_string().starts_with("thickness_mm: "), "{e}");
+    }
+}

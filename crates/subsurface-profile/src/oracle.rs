@@ -1,0 +1,751 @@
+//! CPU reference ("oracle") implementations of the screen-space SSS passes. The
+//! GPU shaders are written to match these; GPU tests compare against them.
+//!
+//! # Conventions shared by every pass
+//!
+//! * Images are row-major, row 0 at the top, `width * height` texels. The centre
+//!   of pixel `(x, y)` is `c = (x + 0.5, y + 0.5)` in pixel units; pixel-space
+//!   positions `p` below use the same convention (`+y` points down the image).
+//! * A pixel with `strength == 0` is copied bit for bit.
+//! * At a blurred pixel: `colorM` = the pass input's colour there, `dM` = depth,
+//!   `m` = strength, `wpm` = world units per profile millimetre, and
+//!   `px_per_mm = wpm * focal_px / dM * m`. Dividing by depth keeps the blur a
+//!   fixed size on the skin (perspective); the factor `m` shrinks the footprint
+//!   with the SSS strength, as `colorM.a` does in Jimenez's shader (003_*).
+//! * A tap at `p`: its colour is the bilinear, clamp-to-edge sample of the pass
+//!   input (as a GPU linear sampler at `uv = p / size`: `t = p - 0.5`,
+//!   `i0 = floor(t)`, `f = t - i0`, indices clamped to `0..size`), see
+//!   [`sample_bilinear`]; its depth and strength are NEAREST samples at
+//!   `clamp(floor(p), 0, size - 1)`, see [`nearest_index`].
+//! * Tap correction (the `lerp(color, colorM, s)` of 003_*'s `BlurPS`):
+//!   `s = 1` if the tap's strength is 0 (no background colour bleeds in); else
+//!   `s = min(|dM - depth_tap| / (edge_mm * wpm), 1)` with `follow_surface`, else
+//!   `s = 0`; then `tap = tap + (colorM - tap) * s`.
+//! * Sums run in the order documented per pass, in f32.
+//!
+//! Because colour is filtered linearly but depth and strength are point sampled
+//! (as in 003_*), a tap that lands within half a texel of an edge, on the
+//! near side of it, still mixes in up to half of the texel across the edge.
+
+use crate::error::{ProfileError, Result, finite, in_range, positive};
+use crate::gaussian::SumOfGaussians;
+use crate::kernel::{GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS, hable13_kernel};
+
+/// G-buffer data the passes read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScreenInput {
+    pub width: u32,
+    pub height: u32,
+    /// Linear HDR diffuse radiance.
+    pub color: Vec<[f32; 3]>,
+    /// Linear view depth in scene units (> 0 where `strength > 0`).
+    pub depth: Vec<f32>,
+    /// SSS strength in 0..=1; 0 marks non-skin pixels.
+    pub strength: Vec<f32>,
+    /// Scene units per profile millimetre (> 0 where `strength > 0`).
+    pub world_per_mm: Vec<f32>,
+}
+
+/// Camera and correction settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScreenParams {
+    /// `0.5 * height_px / tan(fov_y / 2)`.
+    pub focal_px: f32,
+    /// Depth-edge correction on/off.
+    pub follow_surface: bool,
+    /// Depth difference, in profile mm, at which a tap is fully replaced by the
+    /// centre colour.
+    pub edge_mm: f32,
+}
+
+impl ScreenInput {
+    /// A uniform image: every pixel the same colour, depth, strength and scale.
+    pub fn uniform(
+        width: u32,
+        height: u32,
+        color: [f32; 3],
+        depth: f32,
+        strength: f32,
+        world_per_mm: f32,
+    ) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            color: vec![color; n],
+            depth: vec![depth; n],
+            strength: vec![strength; n],
+            world_per_mm: vec![world_per_mm; n],
+        }
+    }
+
+    /// Checks sizes, and that strength is in 0..=1 everywhere and depth and
+    /// `world_per_mm` are finite and > 0 wherever strength > 0.
+    pub fn validate(&self) -> Result<()> {
+        positive("width", self.width as f64)?;
+        positive("height", self.height as f64)?;
+        let n = self.width as usize * self.height as usize;
+        for (field, len) in [
+            ("color", self.color.len()),
+            ("depth", self.depth.len()),
+            ("strength", self.strength.len()),
+            ("world_per_mm", self.world_per_mm.len()),
+        ] {
+            if len != n {
+                return Err(ProfileError::Length {
+                    field: field.into(),
+                    expected: n,
+                    got: len,
+                });
+            }
+        }
+        for i in 0..n {
+            in_range(&format!("strength[{i}]"), self.strength[i] as f64, 0.0, 1.0)?;
+            if self.strength[i] > 0.0 {
+                positive(&format!("depth[{i}]"), self.depth[i] as f64)?;
+                positive(&format!("world_per_mm[{i}]"), self.world_per_mm[i] as f64)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl ScreenParams {
+    /// `focal_px` and `edge_mm` must be finite and > 0.
+    pub fn validate(&self) -> Result<()> {
+        positive("focal_px", self.focal_px as f64)?;
+        positive("edge_mm", self.edge_mm as f64)?;
+        Ok(())
+    }
+}
+
+/// Bilinear clamp-to-edge sample of `img` (`width x height`) at pixel-space `p`.
+pub fn sample_bilinear(img: &[[f32; 3]], width: u32, height: u32, p: [f32; 2]) -> [f32; 3] {
+    let (w, h) = (width as i64, height as i64);
+    let (tx, ty) = (p[0] - 0.5, p[1] - 0.5);
+    let (fx0, fy0) = (tx.floor(), ty.floor());
+    let (fx, fy) = (tx - fx0, ty - fy0);
+    // `as i64` saturates (NaN -> 0), so no input can index out of bounds.
+    let (x0, y0) = (fx0 as i64, fy0 as i64);
+    let cx = |x: i64| x.clamp(0, w - 1) as usize;
+    let cy = |y: i64| y.clamp(0, h - 1) as usize;
+    let at = |x: i64, y: i64| img[cy(y) * width as usize + cx(x)];
+    let (c00, c10, c01, c11) = (
+        at(x0, y0),
+        at(x0 + 1, y0),
+        at(x0, y0 + 1),
+        at(x0 + 1, y0 + 1),
+    );
+    [0, 1, 2].map(|k| {
+        let top = c00[k] + (c10[k] - c00[k]) * fx;
+        let bottom = c01[k] + (c11[k] - c01[k]) * fx;
+        top + (bottom - top) * fy
+    })
+}
+
+/// Index of the texel a NEAREST sampler reads at pixel-space `p`:
+/// `clamp(floor(p), 0, size - 1)` per axis.
+pub fn nearest_index(width: u32, height: u32, p: [f32; 2]) -> usize {
+    let x = (p[0].floor() as i64).clamp(0, width as i64 - 1) as usize;
+    let y = (p[1].floor() as i64).clamp(0, height as i64 - 1) as usize;
+    y * width as usize + x
+}
+
+/// Per-pixel values every tap needs.
+struct Centre {
+    p: [f32; 2],
+    color: [f32; 3],
+    depth: f32,
+    wpm: f32,
+    px_per_mm: f32,
+}
+
+impl Centre {
+    fn new(input: &ScreenInput, color: &[[f32; 3]], params: &ScreenParams, i: usize) -> Self {
+        let w = input.width as usize;
+        let (x, y) = (i % w, i / w);
+        let (depth, wpm) = (input.depth[i], input.world_per_mm[i]);
+        Self {
+            p: [x as f32 + 0.5, y as f32 + 0.5],
+            color: color[i],
+            depth,
+            wpm,
+            px_per_mm: wpm * params.focal_px / depth * input.strength[i],
+        }
+    }
+
+    /// One texel's colour as a tap sees it: pulled back to the centre colour if
+    /// the texel is not skin, or (follow-surface) by its depth difference.
+    fn corrected(
+        &self,
+        input: &ScreenInput,
+        color: &[[f32; 3]],
+        params: &ScreenParams,
+        j: usize,
+    ) -> [f32; 3] {
+        let c = color[j];
+        let s = if input.strength[j] == 0.0 {
+            1.0
+        } else if params.follow_surface {
+            ((self.depth - input.depth[j]).abs() / (params.edge_mm * self.wpm)).min(1.0)
+        } else {
+            0.0
+        };
+        [0, 1, 2].map(|k| c[k] + (self.color[k] - c[k]) * s)
+    }
+
+    /// The tap at `self.p + offset_px`: bilinear (clamp to edge) filtering of the
+    /// four texels around it, each [`Self::corrected`] first, so no fraction of a
+    /// background texel leaks into a skin tap. Texels of zero weight are skipped,
+    /// as the GPU does.
+    fn tap(
+        &self,
+        input: &ScreenInput,
+        color: &[[f32; 3]],
+        params: &ScreenParams,
+        offset_px: [f32; 2],
+    ) -> [f32; 3] {
+        let (w, h) = (input.width as i64, input.height as i64);
+        let (tx, ty) = (
+            self.p[0] + offset_px[0] - 0.5,
+            self.p[1] + offset_px[1] - 0.5,
+        );
+        let (fx0, fy0) = (tx.floor(), ty.floor());
+        let (fx, fy) = (tx - fx0, ty - fy0);
+        // `as i64` saturates (NaN -> 0), so no input can index out of bounds.
+        let (x0, y0) = (fx0 as i64, fy0 as i64);
+        let at = |x: i64, y: i64| (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize;
+        let get = |x, y| self.corrected(input, color, params, at(x, y));
+        let lerp = |a: [f32; 3], b: [f32; 3], t: f32| [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * t);
+        let mut top = get(x0, y0);
+        if fx > 0.0 {
+            top = lerp(top, get(x0 + 1, y0), fx);
+        }
+        if fy > 0.0 {
+            let mut bottom = get(x0, y0 + 1);
+            if fx > 0.0 {
+                bottom = lerp(bottom, get(x0 + 1, y0 + 1), fx);
+            }
+            top = lerp(top, bottom, fy);
+        }
+        top
+    }
+}
+
+fn accumulate(acc: &mut [f32; 3], w: [f32; 3], c: [f32; 3]) {
+    for k in 0..3 {
+        acc[k] += w[k] * c[k];
+    }
+}
+
+fn check_kernel(kernel: &[[f32; 4]]) -> Result<()> {
+    if kernel.is_empty() {
+        return Err(ProfileError::Invalid {
+            field: "kernel".into(),
+            reason: "must have at least one tap".into(),
+        });
+    }
+    for (i, t) in kernel.iter().enumerate() {
+        for (k, &v) in t.iter().enumerate() {
+            finite(&format!("kernel[{i}][{k}]"), v as f64)?;
+        }
+    }
+    Ok(())
+}
+
+/// One 1-D pass of the Separable SSS (2015) blur along `dir` over `color`.
+fn separable_pass_on(
+    input: &ScreenInput,
+    color: &[[f32; 3]],
+    kernel: &[[f32; 4]],
+    dir: [f32; 2],
+    params: &ScreenParams,
+) -> Vec<[f32; 3]> {
+    (0..color.len())
+        .map(|i| {
+            if input.strength[i] == 0.0 {
+                return color[i];
+            }
+            let c = Centre::new(input, color, params, i);
+            let mut acc = [0.0; 3];
+            accumulate(
+                &mut acc,
+                [kernel[0][0], kernel[0][1], kernel[0][2]],
+                c.color,
+            );
+            for t in &kernel[1..] {
+                let d = t[3] * c.px_per_mm;
+                let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
+                accumulate(&mut acc, [t[0], t[1], t[2]], tap);
+            }
+            acc
+        })
+        .collect()
+}
+
+/// One 1-D pass of the Separable SSS blur of `input.color` along `dir`.
+///
+/// `kernel` is `[r, g, b, offset_mm]` with the centre tap first (as
+/// [`crate::separable_kernel`] returns it). Per pixel:
+/// `out = kernel[0].rgb * colorM + sum_{i >= 1} kernel[i].rgb * tap(c + dir * kernel[i].offset * px_per_mm)`,
+/// summed in kernel order. `kernel[0]`'s offset is ignored.
+pub fn separable_pass(
+    input: &ScreenInput,
+    kernel: &[[f32; 4]],
+    dir: [f32; 2],
+    params: &ScreenParams,
+) -> Result<Vec<[f32; 3]>> {
+    input.validate()?;
+    params.validate()?;
+    check_kernel(kernel)?;
+    finite("dir.x", dir[0] as f64)?;
+    finite("dir.y", dir[1] as f64)?;
+    Ok(separable_pass_on(input, &input.color, kernel, dir, params))
+}
+
+/// The full separable blur: the horizontal pass (`dir = (1, 0)`) of
+/// `input.color`, then the vertical pass (`dir = (0, 1)`) of that result, with
+/// depth, strength and `world_per_mm` unchanged.
+pub fn separable(
+    input: &ScreenInput,
+    kernel: &[[f32; 4]],
+    params: &ScreenParams,
+) -> Result<Vec<[f32; 3]>> {
+    let h = separable_pass(input, kernel, [1.0, 0.0], params)?;
+    Ok(separable_pass_on(input, &h, kernel, [0.0, 1.0], params))
+}
+
+/// One 7-tap Gaussian pass of standard deviation `sigma_mm` along `dir`.
+fn gauss7_pass(
+    input: &ScreenInput,
+    color: &[[f32; 3]],
+    sigma_mm: f32,
+    dir: [f32; 2],
+    params: &ScreenParams,
+    min_sigma_px: f32,
+) -> Vec<[f32; 3]> {
+    (0..color.len())
+        .map(|i| {
+            if input.strength[i] == 0.0 {
+                return color[i];
+            }
+            let c = Centre::new(input, color, params, i);
+            let sigma_px = sigma_mm * c.px_per_mm;
+            if sigma_px < min_sigma_px {
+                return c.color;
+            }
+            let mut acc = [0.0; 3];
+            accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[3]; 3], c.color);
+            for j in [0, 1, 2, 4, 5, 6] {
+                let d = GAUSSIAN7_OFFSETS_SIGMA[j] * sigma_px;
+                let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
+                accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[j]; 3], tap);
+            }
+            acc
+        })
+        .collect()
+}
+
+/// The sum-of-Gaussians blur of Jimenez et al. 2009 / GPU Pro (003_*).
+///
+/// The profile's terms, sorted by variance `v_0 < ... < v_{K-1}`, have their
+/// weights normalised so each channel sums to 1. `blurred_0 = input.color`; for
+/// `k >= 1`, `blurred_k = V(H(blurred_{k-1}))` with `sigma_mm = sqrt(v_k - v_{k-1})`
+/// (d'Eon's incremental convolution: each Gaussian is the previous one blurred
+/// further). A 1-D pass H (`dir (1,0)`) or V (`dir (0,1)`) is
+/// `0.382 * colorM + sum_{j = -3..=3, j != 0} w_j * tap(c + dir * j * sigma_px)`,
+/// `w` = [`GAUSSIAN7_WEIGHTS`], `sigma_px = sigma_mm * px_per_mm`, summed for
+/// `j = -3, -2, -1, 1, 2, 3` after the centre; where `sigma_px < min_sigma_px`
+/// the pass copies its input pixel (GPU Pro's removal of sub-pixel Gaussians).
+/// Result: `sum_k w_k * blurred_k` per channel, accumulated for `k = 0..K`;
+/// pixels with strength 0 keep the input colour exactly.
+pub fn gaussian6(
+    input: &ScreenInput,
+    profile: &SumOfGaussians,
+    params: &ScreenParams,
+    min_sigma_px: f32,
+) -> Result<Vec<[f32; 3]>> {
+    input.validate()?;
+    params.validate()?;
+    finite("min_sigma_px", min_sigma_px as f64)?;
+    let profile = profile.normalized()?;
+    let terms = profile.terms();
+    let weight = |k: usize| terms[k].weight.map(|w| w as f32);
+    let mut blurred = input.color.clone();
+    let mut out: Vec<[f32; 3]> = vec![[0.0; 3]; blurred.len()];
+    for (o, &b) in out.iter_mut().zip(&blurred) {
+        accumulate(o, weight(0), b);
+    }
+    for k in 1..terms.len() {
+        let sigma_mm = (terms[k].variance - terms[k - 1].variance).max(0.0).sqrt() as f32;
+        let h = gauss7_pass(input, &blurred, sigma_mm, [1.0, 0.0], params, min_sigma_px);
+        blurred = gauss7_pass(input, &h, sigma_mm, [0.0, 1.0], params, min_sigma_px);
+        for (o, &b) in out.iter_mut().zip(&blurred) {
+            accumulate(o, weight(k), b);
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        if input.strength[i] == 0.0 {
+            *o = input.color[i];
+        }
+    }
+    Ok(out)
+}
+
+/// Hable et al. 2009's single 2-D pass with the 13 jittered taps of 001_*,
+/// Table 1, whose positions are in mm on the skin and whose weights are
+/// normalised per channel ([`hable13_kernel`]; the raw table sums to 0.9977,
+/// 1.0494, 0.9996). `out = w_0 * colorM + sum_{i = 1..13} w_i * tap(c + (X_i, Y_i) * px_per_mm)`,
+/// in table order, with `+Y` down the image.
+pub fn hable13(input: &ScreenInput, params: &ScreenParams) -> Result<Vec<[f32; 3]>> {
+    input.validate()?;
+    params.validate()?;
+    let kernel = hable13_kernel();
+    let color = &input.color;
+    Ok((0..color.len())
+        .map(|i| {
+            if input.strength[i] == 0.0 {
+                return color[i];
+            }
+            let c = Centre::new(input, color, params, i);
+            let mut acc = [0.0; 3];
+            accumulate(
+                &mut acc,
+                [kernel[0][2], kernel[0][3], kernel[0][4]],
+                c.color,
+            );
+            for t in &kernel[1..] {
+                let tap = c.tap(
+                    input,
+                    color,
+                    params,
+                    [t[0] * c.px_per_mm, t[1] * c.px_per_mm],
+                );
+                accumulate(&mut acc, [t[2], t[3], t[4]], tap);
+            }
+            acc
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::{KernelParams, separable_kernel};
+
+    const PARAMS: ScreenParams = ScreenParams {
+        focal_px: 40.0,
+        follow_surface: true,
+        edge_mm: 1.0,
+    };
+
+    fn skin_kernel() -> Vec<[f32; 4]> {
+        separable_kernel(&KernelParams::default()).unwrap()
+    }
+
+    type Method = fn(&ScreenInput) -> Vec<[f32; 3]>;
+
+    fn methods() -> [(&'static str, Method); 3] {
+        [
+            ("separable", |i| {
+                separable(i, &skin_kernel(), &PARAMS).unwrap()
+            }),
+            ("gaussian6", |i| {
+                gaussian6(i, &SumOfGaussians::skin(), &PARAMS, 0.0).unwrap()
+            }),
+            ("hable13", |i| hable13(i, &PARAMS).unwrap()),
+        ]
+    }
+
+    fn sum(img: &[[f32; 3]]) -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for p in img {
+            for k in 0..3 {
+                s[k] += p[k] as f64;
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn sampling_conventions() {
+        let img = [[0.0, 0.0, 0.0], [1.0, 2.0, 4.0]];
+        // Between the two texel centres: the average.
+        assert_eq!(sample_bilinear(&img, 2, 1, [1.0, 0.5]), [0.5, 1.0, 2.0]);
+        // At a texel centre: that texel exactly.
+        assert_eq!(sample_bilinear(&img, 2, 1, [1.5, 0.5]), [1.0, 2.0, 4.0]);
+        // Left of the first centre and far outside: clamped.
+        assert_eq!(sample_bilinear(&img, 2, 1, [0.2, -7.0]), [0.0; 3]);
+        assert_eq!(sample_bilinear(&img, 2, 1, [9.0, 3.0]), [1.0, 2.0, 4.0]);
+        assert_eq!(nearest_index(2, 1, [0.99, 0.5]), 0);
+        assert_eq!(nearest_index(2, 1, [1.0, 0.5]), 1);
+        assert_eq!(nearest_index(2, 1, [-3.0, 9.0]), 0);
+        assert_eq!(nearest_index(2, 1, [f32::NAN, f32::NAN]), 0);
+    }
+
+    #[test]
+    fn constant_image_stays_constant_everywhere() {
+        let color = [0.7, 0.4, 0.2];
+        let input = ScreenInput::uniform(24, 20, color, 1.5, 1.0, 2.0);
+        for (name, run) in methods() {
+            for (i, p) in run(&input).iter().enumerate() {
+                for k in 0..3 {
+                    assert!((p[k] - color[k]).abs() < 1e-5, "{name}: pixel {i} {p:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn impulse_energy_is_preserved_and_spread() {
+        // A uniform surface makes every pass a convolution, so the total is kept.
+        // px_per_mm = 0.05 * 40 = 2: the widest skin Gaussian (sigma 2.7 mm) is
+        // 5.4 px, so 32 px to the border keeps the clamp-to-edge out of play.
+        let mut input = ScreenInput::uniform(64, 64, [0.0; 3], 1.0, 1.0, 0.05);
+        let centre = 32 * 64 + 32;
+        input.color[centre] = [100.0, 100.0, 100.0];
+        for (name, run) in methods() {
+            let out = run(&input);
+            let s = sum(&out);
+            for k in 0..3 {
+                assert!(
+                    (s[k] - 100.0).abs() < 1e-3,
+                    "{name}: channel {k} sums to {}",
+                    s[k]
+                );
+            }
+            assert!(out[centre][0] < 99.0, "{name} did not blur");
+        }
+    }
+
+    #[test]
+    fn gaussian6_red_spreads_widest() {
+        let mut input = ScreenInput::uniform(64, 64, [0.0; 3], 1.0, 1.0, 0.1);
+        input.color[32 * 64 + 32] = [1.0; 3];
+        let out = gaussian6(&input, &SumOfGaussians::skin(), &PARAMS, 0.0).unwrap();
+        let mut m2 = [0.0f64; 3];
+        for (i, p) in out.iter().enumerate() {
+            let (dx, dy) = ((i % 64) as f64 - 32.0, (i / 64) as f64 - 32.0);
+            for k in 0..3 {
+                m2[k] += p[k] as f64 * (dx * dx + dy * dy);
+            }
+        }
+        assert!(m2[0] > 2.0 * m2[1] && m2[1] > m2[2], "{m2:?}");
+        // Per axis, the profile's variance is sum_k w_k (v_k - v_0) px^2, up to
+        // the 7-tap kernel's own variance (1.08 sigma^2) and bilinear spreading.
+        let ppm = 0.1 * 40.0;
+        let skin = SumOfGaussians::skin();
+        let v0 = skin.terms()[0].variance;
+        let expect: f64 = skin
+            .terms()
+            .iter()
+            .map(|t| t.weight[0] * (t.variance - v0))
+            .sum::<f64>()
+            * ppm
+            * ppm;
+        let got = m2[0] / 2.0;
+        assert!(
+            (got / expect - 1.0).abs() < 0.2,
+            "red variance {got} vs {expect}"
+        );
+    }
+
+    #[test]
+    fn separable_pass_hand_computed() {
+        // N = 3: offsets 0, -2, +2 mm. px_per_mm = 1 * 3 / 2 * m.
+        let k = separable_kernel(&KernelParams {
+            samples: 3,
+            strength: [1.0; 3],
+            falloff: [1.0; 3],
+        })
+        .unwrap();
+        let w = 9;
+        let mut input = ScreenInput::uniform(w, 1, [0.0; 3], 2.0, 1.0, 1.0);
+        for x in 0..w as usize {
+            input.color[x] = [x as f32, (x * x) as f32, 1.0];
+        }
+        let params = ScreenParams {
+            focal_px: 3.0,
+            follow_surface: false,
+            edge_mm: 1.0,
+        };
+        // m = 1: taps at exactly +-3 px land on texel centres.
+        let out = separable_pass(&input, &k, [1.0, 0.0], &params).unwrap();
+        let x = 4usize;
+        let c = |i: usize| input.color[i];
+        for ch in 0..3 {
+            let want = k[0][ch] * c(x)[ch] + k[1][ch] * c(x - 3)[ch] + k[2][ch] * c(x + 3)[ch];
+            assert!(
+                (out[x][ch] - want).abs() < 1e-5,
+                "ch {ch}: {} vs {want}",
+                out[x][ch]
+            );
+        }
+        // m = 0.5 halves the footprint: taps at +-1.5 px average two texels.
+        input.strength = vec![0.5; w as usize];
+        let out = separable_pass(&input, &k, [1.0, 0.0], &params).unwrap();
+        let mid = |a: usize, b: usize, ch: usize| 0.5 * (c(a)[ch] + c(b)[ch]);
+        for ch in 0..3 {
+            let want = k[0][ch] * c(x)[ch] + k[1][ch] * mid(2, 3, ch) + k[2][ch] * mid(5, 6, ch);
+            assert!(
+                (out[x][ch] - want).abs() < 1e-5,
+                "ch {ch}: {} vs {want}",
+                out[x][ch]
+            );
+        }
+    }
+
+    /// Left half: skin colour A at depth 1. Right half: colour B at depth
+    /// `right_depth` with `right_strength`.
+    fn split(right_depth: f32, right_strength: f32) -> ScreenInput {
+        let (w, h) = (32u32, 8u32);
+        let mut input = ScreenInput::uniform(w, h, [1.0, 0.5, 0.25], 1.0, 1.0, 0.1);
+        for y in 0..h as usize {
+            for x in 16..w as usize {
+                let i = y * w as usize + x;
+                input.color[i] = [0.0, 10.0, 20.0];
+                input.depth[i] = right_depth;
+                input.strength[i] = right_strength;
+            }
+        }
+        input
+    }
+
+    /// Largest fraction of the way from A to B among left-half pixels.
+    fn worst_leak(input: &ScreenInput, out: &[[f32; 3]]) -> f32 {
+        let (a, b) = ([1.0f32, 0.5, 0.25], [0.0f32, 10.0, 20.0]);
+        let mut worst = 0.0f32;
+        for (i, p) in out.iter().enumerate() {
+            if (i % input.width as usize) < 16 {
+                worst = worst.max((p[2] - a[2]) / (b[2] - a[2]));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn depth_edges_are_not_crossed() {
+        let far = split(10.0, 1.0);
+        let mut flat_params = PARAMS;
+        flat_params.follow_surface = false;
+        type WithParams = fn(&ScreenInput, &ScreenParams) -> Vec<[f32; 3]>;
+        let runs: [(&str, WithParams); 3] = [
+            ("separable", |i, p| separable(i, &skin_kernel(), p).unwrap()),
+            ("gaussian6", |i, p| {
+                gaussian6(i, &SumOfGaussians::skin(), p, 0.0).unwrap()
+            }),
+            ("hable13", |i, p| hable13(i, p).unwrap()),
+        ];
+        for (name, run) in runs {
+            let leak_off = worst_leak(&far, &run(&far, &flat_params));
+            let leak_on = worst_leak(&far, &run(&far, &PARAMS));
+            // Without correction the far surface bleeds in heavily; with it only
+            // the half-texel linear-filtering footprint at the edge remains.
+            assert!(leak_off > 0.03, "{name}: {leak_off}");
+            assert!(leak_on < 0.2 * leak_off, "{name}: {leak_on} vs {leak_off}");
+            // And the near side does not reach the far side's interior: right
+            // pixels more than 1 px from the edge see only B.
+            let out = run(&far, &PARAMS);
+            for (i, p) in out.iter().enumerate() {
+                if (i % 32) >= 18 {
+                    assert!((p[2] - 20.0).abs() < 1e-4, "{name}: pixel {i} {p:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn background_is_copied_and_does_not_bleed() {
+        let input = split(1.0, 0.0);
+        for (name, run) in methods() {
+            let out = run(&input);
+            for (i, p) in out.iter().enumerate() {
+                if input.strength[i] == 0.0 {
+                    assert_eq!(
+                        p.map(f32::to_bits),
+                        input.color[i].map(f32::to_bits),
+                        "{name}"
+                    );
+                }
+            }
+            let leak = worst_leak(&input, &out);
+            // Same depth and follow_surface on: only the strength mask stops B,
+            // again up to the half-texel filtering footprint.
+            assert!(leak < 0.02, "{name}: {leak}");
+        }
+    }
+
+    #[test]
+    fn sub_pixel_gaussians_are_skipped() {
+        let mut input = ScreenInput::uniform(16, 16, [0.0; 3], 1.0, 1.0, 0.1);
+        input.color[8 * 16 + 8] = [1.0; 3];
+        let skin = SumOfGaussians::skin();
+        let out = gaussian6(&input, &skin, &PARAMS, 1e6).unwrap();
+        for (a, b) in out.iter().zip(&input.color) {
+            for k in 0..3 {
+                assert!((a[k] - b[k]).abs() < 1e-6);
+            }
+        }
+        // px_per_mm = 4 here: sigma_px of the first step is sqrt(0.0484 - 0.0064) * 4 = 0.82,
+        // of the second 2.0; a threshold of 1 px keeps only the wider steps.
+        let all = gaussian6(&input, &skin, &PARAMS, 0.0).unwrap();
+        let some = gaussian6(&input, &skin, &PARAMS, 1.0).unwrap();
+        assert!(all[8 * 16 + 8][2] < some[8 * 16 + 8][2]);
+    }
+
+    #[test]
+    fn bad_inputs_are_errors_not_panics() {
+        let mut input = ScreenInput::uniform(4, 4, [1.0; 3], 1.0, 1.0, 1.0);
+        let k = skin_kernel();
+        input.depth.pop();
+        let e = separable(&input, &k, &PARAMS).unwrap_err().to_string();
+        assert_eq!(e, "depth: expected length 16 (got 15)");
+        let mut input = ScreenInput::uniform(4, 4, [1.0; 3], 1.0, 1.0, 1.0);
+        input.depth[5] = 0.0;
+        assert!(
+            hable13(&input, &PARAMS)
+                .unwrap_err()
+                .to_string()
+                .starts_with("depth[5]: ")
+        );
+        input.depth[5] = 1.0;
+        input.strength[3] = 1.5;
+        assert!(
+            gaussian6(&input, &SumOfGaussians::skin(), &PARAMS, 0.0)
+                .unwrap_err()
+                .to_string()
+                .starts_with("strength[3]: ")
+        );
+        input.strength[3] = 1.0;
+        let bad = ScreenParams {
+            focal_px: -1.0,
+            ..PARAMS
+        };
+        assert!(
+            hable13(&input, &bad)
+                .unwrap_err()
+                .to_string()
+                .starts_with("focal_px: ")
+        );
+        let bad = ScreenParams {
+            edge_mm: f32::NAN,
+            ..PARAMS
+        };
+        assert!(
+            hable13(&input, &bad)
+                .unwrap_err()
+                .to_string()
+                .starts_with("edge_mm: ")
+        );
+        assert!(
+            separable(&input, &[], &PARAMS)
+                .unwrap_err()
+                .to_string()
+                .starts_with("kernel: ")
+        );
+        // Background pixels may carry any depth (e.g. 0 or infinity).
+        input.strength[0] = 0.0;
+        input.depth[0] = f32::INFINITY;
+        assert!(separable(&input, &k, &PARAMS).is_ok());
+    }
+}

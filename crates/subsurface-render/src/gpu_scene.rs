@@ -1,0 +1,443 @@
+//! The scene on the GPU: vertex/index buffers, material textures and per-object bind groups,
+//! plus the camera and light data derived from the scene description.
+
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::error::RenderError;
+use crate::gpu::GpuContext;
+use crate::mesh::Vertex;
+use crate::scene::{LightDesc, LightKind, Object, Scene};
+use crate::uniforms::{
+    CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat, v4,
+};
+
+pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
+};
+
+/// Bind group layout of group 1 (`Object` + material maps), shared by shadow and lighting.
+pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let tex = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("object"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            tex(1),
+            tex(2),
+            tex(3),
+            wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}
+
+pub struct GpuObject {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub index_count: u32,
+    pub uniform: wgpu::Buffer,
+    pub bind_group: wgpu::BindGroup,
+}
+
+impl GpuObject {
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+}
+
+/// Scene units per profile millimetre: the profile's radii are in mm, the object's units are
+/// `mm_per_unit` mm, and its transform scales them into the world.
+pub fn world_per_mm(object: &Object) -> f32 {
+    let s = object.transform.determinant().abs().cbrt();
+    object.material.sss_width * s / object.mm_per_unit
+}
+
+pub fn object_uniform(object: &Object) -> ObjectUniform {
+    let m = &object.material;
+    ObjectUniform {
+        model: mat(object.transform),
+        normal_matrix: mat(object.transform.inverse().transpose()),
+        albedo: [
+            object.albedo[0],
+            object.albedo[1],
+            object.albedo[2],
+            m.roughness,
+        ],
+        params: [
+            m.specular,
+            m.sss_strength,
+            world_per_mm(object),
+            m.translucency,
+        ],
+        flags: [
+            object.albedo_texture.is_some() as u32 as f32,
+            object.normal_texture.is_some() as u32 as f32,
+            object.specular_texture.is_some() as u32 as f32,
+            0.0,
+        ],
+    }
+}
+
+fn upload_texture(
+    ctx: &GpuContext,
+    image: Option<&image::RgbaImage>,
+    format: wgpu::TextureFormat,
+    label: &str,
+) -> Result<wgpu::TextureView, RenderError> {
+    let white = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
+    let base = image.unwrap_or(&white);
+    let max = ctx.max_texture_size();
+    if base.width() > max || base.height() > max {
+        return Err(RenderError::invalid(
+            label,
+            format!(
+                "texture is {}x{}, larger than this device's limit {max}",
+                base.width(),
+                base.height()
+            ),
+        ));
+    }
+    // Mip maps on the CPU: the head's 2k maps are minified on screen and would alias.
+    let levels = 32 - base.width().max(base.height()).leading_zeros();
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: base.width(),
+            height: base.height(),
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: levels,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let mut level_image = base.clone();
+    for level in 0..levels {
+        if level > 0 {
+            let w = (level_image.width() / 2).max(1);
+            let h = (level_image.height() / 2).max(1);
+            level_image =
+                image::imageops::resize(&level_image, w, h, image::imageops::FilterType::Triangle);
+        }
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: level,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &level_image,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * level_image.width()),
+                rows_per_image: None,
+            },
+            wgpu::Extent3d {
+                width: level_image.width(),
+                height: level_image.height(),
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    Ok(texture.create_view(&Default::default()))
+}
+
+pub fn upload_objects(
+    ctx: &GpuContext,
+    scene: &Scene,
+    layout: &wgpu::BindGroupLayout,
+) -> Result<Vec<GpuObject>, RenderError> {
+    let device = &ctx.device;
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("material"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        anisotropy_clamp: 4,
+        ..Default::default()
+    });
+    let mut out = Vec::new();
+    for (i, object) in scene.objects.iter().enumerate() {
+        if object.mesh.indices.is_empty() {
+            continue;
+        }
+        let label = format!("objects[{i}]");
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&label),
+            contents: bytemuck::cast_slice(&object.mesh.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&label),
+            contents: bytemuck::cast_slice(&object.mesh.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&label),
+            contents: bytemuck::bytes_of(&object_uniform(object)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let albedo = upload_texture(
+            ctx,
+            object.albedo_texture.as_ref(),
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            &format!("{label}.material.albedo_texture"),
+        )?;
+        let normal = upload_texture(
+            ctx,
+            object.normal_texture.as_ref(),
+            wgpu::TextureFormat::Rgba8Unorm,
+            &format!("{label}.material.normal_texture"),
+        )?;
+        let specular = upload_texture(
+            ctx,
+            object.specular_texture.as_ref(),
+            wgpu::TextureFormat::Rgba8Unorm,
+            &format!("{label}.material.specular_texture"),
+        )?;
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&label),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&albedo),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&normal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&specular),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+            ],
+        });
+        out.push(GpuObject {
+            vertices,
+            indices,
+            index_count: object.mesh.indices.len() as u32,
+            uniform,
+            bind_group,
+        });
+    }
+    Ok(out)
+}
+
+/// The camera of the scene for a target of `width` x `height` pixels.
+pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
+    let c = &scene.desc.camera;
+    let position = Vec3::from(c.position);
+    let target = Vec3::from(c.target);
+    let fov = c.fov_y_deg.to_radians();
+    let view = Mat4::look_at_rh(position, target, Vec3::from(c.up));
+    let proj = Mat4::perspective_rh(fov, width as f32 / height as f32, c.near, c.far);
+    let focal_px = 0.5 * height as f32 / (0.5 * fov).tan();
+    CameraUniform {
+        view_proj: mat(proj * view),
+        position: v4(position, 1.0),
+        forward: v4((target - position).normalize(), 0.0),
+        params: [c.near, c.far, focal_px, 0.0],
+    }
+}
+
+/// Where each light's shadow maps live in the shadow atlas (a 2-D array texture).
+#[derive(Clone, Debug)]
+pub struct ShadowLayer {
+    pub light: usize,
+    pub size: u32,
+    pub view_proj: Mat4,
+    /// Origin that `light_distance` measures from (the light, or the directional light's
+    /// shadow-camera origin).
+    pub origin: Vec3,
+}
+
+pub struct LightSetup {
+    pub uniform: LightsUniform,
+    pub layers: Vec<ShadowLayer>,
+    pub atlas_size: u32,
+}
+
+fn safe_up(dir: Vec3) -> Vec3 {
+    if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y }
+}
+
+/// Light-space matrices and uniforms. Shadow near/far planes are fitted to the scene's
+/// bounding sphere so that depth precision is spent where the geometry is.
+pub fn light_setup(scene: &Scene) -> Result<LightSetup, RenderError> {
+    if scene.desc.lights.len() > MAX_LIGHTS {
+        return Err(RenderError::invalid(
+            "lights",
+            format!(
+                "at most {MAX_LIGHTS} lights are supported (got {})",
+                scene.desc.lights.len()
+            ),
+        ));
+    }
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let atlas_size = scene
+        .desc
+        .lights
+        .iter()
+        .map(|l| l.shadow_map_size)
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let mut uniform = LightsUniform::zeroed_default();
+    uniform.count = [scene.desc.lights.len() as u32, 0, 0, 0];
+    let a = scene.desc.render.ambient;
+    uniform.ambient = [a[0], a[1], a[2], 0.0];
+    let mut layers = Vec::new();
+    for (i, l) in scene.desc.lights.iter().enumerate() {
+        let (u, light_layers) = light_uniform(i, l, centre, radius, atlas_size, layers.len());
+        uniform.lights[i] = u;
+        layers.extend(light_layers);
+    }
+    Ok(LightSetup {
+        uniform,
+        layers,
+        atlas_size,
+    })
+}
+
+impl LightsUniform {
+    fn zeroed_default() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+fn light_uniform(
+    index: usize,
+    l: &LightDesc,
+    centre: Vec3,
+    radius: f32,
+    atlas_size: u32,
+    first_layer: usize,
+) -> (LightUniform, Vec<ShadowLayer>) {
+    let pos = Vec3::from(l.position);
+    let dir = (Vec3::from(l.target) - pos).normalize_or(Vec3::NEG_Z);
+    let colour = Vec3::from(l.color) * l.intensity;
+    let kind = match l.kind {
+        LightKind::Point => 0.0,
+        LightKind::Spot => 1.0,
+        LightKind::Directional => 2.0,
+    };
+    let far = ((pos - centre).length() + radius) * 1.05;
+    let near = (far * 1e-3)
+        .max(((pos - centre).length() - radius) * 0.5)
+        .max(far * 1e-4);
+    let mut views: Vec<(Mat4, Vec3)> = Vec::new();
+    let mut origin = pos;
+    if l.shadow_map_size > 0 {
+        match l.kind {
+            LightKind::Spot => {
+                let fov = (2.0 * l.outer_angle_deg.to_radians() * 1.05).min(179f32.to_radians());
+                let v = Mat4::look_at_rh(pos, pos + dir, safe_up(dir));
+                views.push((Mat4::perspective_rh(fov, 1.0, near, far) * v, pos));
+            }
+            LightKind::Point => {
+                let faces = [
+                    (Vec3::X, Vec3::NEG_Y),
+                    (Vec3::NEG_X, Vec3::NEG_Y),
+                    (Vec3::Y, Vec3::Z),
+                    (Vec3::NEG_Y, Vec3::NEG_Z),
+                    (Vec3::Z, Vec3::NEG_Y),
+                    (Vec3::NEG_Z, Vec3::NEG_Y),
+                ];
+                // Slightly wider than 90 degrees so PCF taps at face edges stay inside.
+                let proj = Mat4::perspective_rh(92f32.to_radians(), 1.0, near, far);
+                for (d, up) in faces {
+                    views.push((proj * Mat4::look_at_rh(pos, pos + d, up), pos));
+                }
+            }
+            LightKind::Directional => {
+                origin = centre - dir * (2.0 * radius);
+                let v = Mat4::look_at_rh(origin, centre, safe_up(dir));
+                let p = Mat4::orthographic_rh(
+                    -radius,
+                    radius,
+                    -radius,
+                    radius,
+                    0.5 * radius,
+                    3.5 * radius,
+                );
+                views.push((p * v, origin));
+            }
+        }
+    }
+    let mut vp = [[[0.0; 4]; 4]; 6];
+    for (k, (m, _)) in views.iter().enumerate() {
+        vp[k] = mat(*m);
+    }
+    let first = if views.is_empty() {
+        -1.0
+    } else {
+        first_layer as f32
+    };
+    let cos_outer = l.outer_angle_deg.to_radians().cos();
+    let cos_inner = l.inner_angle_deg.to_radians().cos().max(cos_outer + 1e-4);
+    let u = LightUniform {
+        position: v4(origin, kind),
+        direction: v4(dir, first),
+        color: v4(colour, l.shadow_bias),
+        spot: [
+            cos_outer,
+            cos_inner,
+            l.shadow_map_size.max(1) as f32 / atlas_size as f32,
+            1.0 / atlas_size as f32,
+        ],
+        view_proj: vp,
+    };
+    let layers = views
+        .into_iter()
+        .map(|(view_proj, origin)| ShadowLayer {
+            light: index,
+            size: l.shadow_map_size,
+            view_proj,
+            origin,
+        })
+        .collect();
+    (u, layers)
+}

@@ -1,0 +1,69 @@
+//! Real-time subsurface scattering for human skin on wgpu.
+//!
+//! The frame flows one way: scene -> shadow maps (linear light distance) -> lighting (HDR
+//! diffuse, specular, linear depth, SSS strength) -> composite and filmic tone map -> image.
+//! Each pass lives in [`passes`] with its WGSL beside it and can be used on its own textures.
+
+pub mod error;
+pub mod gpu;
+pub mod gpu_scene;
+pub mod mesh;
+pub mod passes;
+pub mod readback;
+pub mod renderer;
+pub mod scene;
+pub mod timing;
+pub mod uniforms;
+
+pub use error::RenderError;
+pub use gpu::GpuContext;
+pub use passes::tonemap::DebugView;
+pub use renderer::{Frame, RenderOptions, Renderer};
+pub use scene::Scene;
+pub use timing::PassTiming;
+
+/// True when `SUBSURFACE_REQUIRE_GPU=1`: tests must fail, not skip, without an adapter.
+pub fn gpu_required() -> bool {
+    std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+#[cfg(test)]
+mod shader_tests {
+    /// Every WGSL program parses and validates with naga; no GPU needed.
+    #[test]
+    fn all_wgsl_validates_with_naga() {
+        for (name, source) in crate::passes::ALL_SHADERS {
+            let module = naga::front::wgsl::parse_str(source)
+                .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        }
+    }
+
+    /// Every .wgsl file beside the passes is part of some compiled shader, so none escapes
+    /// the validation above.
+    #[test]
+    fn every_wgsl_file_is_validated() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/passes");
+        let mut count = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "wgsl") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                assert!(
+                    crate::passes::ALL_SHADERS
+                        .iter()
+                        .any(|(_, s)| s.contains(text.trim())),
+                    "{} is not in passes::ALL_SHADERS",
+                    path.display()
+                );
+                count += 1;
+            }
+        }
+        assert!(count >= 4, "expected at least 4 WGSL files, found {count}");
+    }
+}

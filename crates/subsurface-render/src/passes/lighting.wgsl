@@ -1,0 +1,191 @@
+// Lighting pass: writes the inputs of screen-space subsurface scattering.
+//   0: diffuse radiance (irradiance x albedo), the part that is blurred
+//   1: specular radiance, added after the blur and never blurred
+//   2: linear view depth in scene units (the blur width is divided by it)
+//   3: SSS strength (0 = not skin) and scene units per profile millimetre
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> lights: Lights;
+@group(0) @binding(2) var shadow_atlas: texture_2d_array<f32>;
+
+struct LitVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) tangent: vec4<f32>,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> LitVarying {
+    var out: LitVarying;
+    let world = object.model * vec4<f32>(v.position, 1.0);
+    out.world = world.xyz;
+    out.clip = camera.view_proj * world;
+    out.normal = (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
+    out.tangent = vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
+    out.uv = v.uv;
+    return out;
+}
+
+struct GBuffer {
+    @location(0) diffuse: vec4<f32>,
+    @location(1) specular: vec4<f32>,
+    @location(2) depth: f32,
+    @location(3) sss: vec2<f32>,
+};
+
+// Point lights keep six layers in the order +X, -X, +Y, -Y, +Z, -Z (see shadow.rs).
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
+}
+
+struct ShadowCoord {
+    uv: vec2<f32>,   // in the light's own map, 0..1
+    layer: i32,
+    inside: bool,
+};
+
+fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
+    var sc: ShadowCoord;
+    sc.inside = false;
+    sc.layer = -1;
+    sc.uv = vec2<f32>(0.0);
+    if (light.direction.w < 0.0) {
+        return sc;
+    }
+    var face = 0u;
+    if (light.position.w == KIND_POINT) {
+        face = cube_face(p - light.position.xyz);
+    }
+    let clip = light.view_proj[face] * vec4<f32>(p, 1.0);
+    if (clip.w <= 0.0) {
+        return sc;
+    }
+    let ndc = clip.xyz / clip.w;
+    sc.uv = ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    sc.layer = i32(light.direction.w) + i32(face);
+    sc.inside = all(sc.uv >= vec2<f32>(0.0)) && all(sc.uv <= vec2<f32>(1.0));
+    return sc;
+}
+
+// Percentage-closer filtering over a 3x3 texel area with bilinear weights (4x4 loads):
+// linear-depth maps are R32Float, which is not filterable everywhere, so compare by hand.
+fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
+    let sc = shadow_coord(light, p);
+    if (!sc.inside) {
+        return 1.0;
+    }
+    let size = light.spot.z / light.spot.w; // this light's map size in texels
+    let d = light_distance(light.position, light.direction.xyz, p) - light.color.w;
+    let t = sc.uv * size - vec2<f32>(0.5);
+    let base = floor(t) - vec2<f32>(1.0);
+    let f = t - floor(t);
+    let wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
+    let wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
+    let max_texel = vec2<i32>(i32(size) - 1);
+    var lit = 0.0;
+    for (var j = 0; j < 4; j++) {
+        for (var i = 0; i < 4; i++) {
+            let texel = clamp(vec2<i32>(base) + vec2<i32>(i, j), vec2<i32>(0), max_texel);
+            let occluder = textureLoad(shadow_atlas, texel, sc.layer, 0).r;
+            lit += select(0.0, wx[i] * wy[j], d <= occluder);
+        }
+    }
+    return lit / 9.0;
+}
+
+// Beckmann distribution (d'Eon and Luebke 2007, Kelemen/Szirmay-Kalos skin specular).
+fn beckmann(ndoth: f32, m: f32) -> f32 {
+    let c2 = max(ndoth * ndoth, 1e-4);
+    let tan2 = (1.0 - c2) / c2;
+    let m2 = m * m;
+    return exp(-tan2 / m2) / (m2 * c2 * c2);
+}
+
+// Schlick's Fresnel with skin's F0 = 0.028 (index of refraction 1.4).
+fn fresnel(h: vec3<f32>, v: vec3<f32>) -> f32 {
+    let base = 1.0 - max(dot(v, h), 0.0);
+    let e = pow(base, 5.0);
+    return e + 0.028 * (1.0 - e);
+}
+
+// Kelemen/Szirmay-Kalos specular BRDF times cos: rho_s * P_H * F / |L + V|^2 * (N.L).
+fn ks_specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32) -> f32 {
+    let ndotl = dot(n, l);
+    if (ndotl <= 0.0) {
+        return 0.0;
+    }
+    let h_unnorm = l + v;
+    let h = normalize(h_unnorm);
+    let ph = beckmann(max(dot(n, h), 0.0), m);
+    let fr = ph * fresnel(h, v) / max(dot(h_unnorm, h_unnorm), 1e-4);
+    return max(ndotl * rho_s * fr, 0.0);
+}
+
+@fragment
+fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
+    var n_vertex = normalize(in.normal);
+    if (!front) {
+        n_vertex = -n_vertex;
+    }
+    var n = n_vertex;
+    if (object.flags.y > 0.5) {
+        let t = normalize(in.tangent.xyz - n_vertex * dot(n_vertex, in.tangent.xyz));
+        let b = cross(n_vertex, t) * select(-1.0, 1.0, in.tangent.w >= 0.0);
+        let tn = textureSample(normal_map, material_sampler, in.uv).xyz * 2.0 - vec3<f32>(1.0);
+        n = normalize(t * tn.x + b * tn.y + n_vertex * tn.z);
+    }
+    var albedo = object.albedo.rgb;
+    if (object.flags.x > 0.5) {
+        albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
+    }
+    var rho_s = object.params.x;
+    if (object.flags.z > 0.5) {
+        rho_s *= textureSample(specular_map, material_sampler, in.uv).r;
+    }
+    let m = object.albedo.a;
+    let v = normalize(camera.position.xyz - in.world);
+
+    var irradiance = vec3<f32>(0.0);
+    var specular = vec3<f32>(0.0);
+    let count = min(lights.count.x, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.lights[i];
+        var l: vec3<f32>;
+        var attenuation = 1.0;
+        if (light.position.w == KIND_DIRECTIONAL) {
+            l = -light.direction.xyz;
+        } else {
+            let to_light = light.position.xyz - in.world;
+            let dist2 = max(dot(to_light, to_light), 1e-8);
+            l = to_light * inverseSqrt(dist2);
+            attenuation = 1.0 / dist2;
+        }
+        var spot = 1.0;
+        if (light.position.w == KIND_SPOT) {
+            spot = smoothstep(light.spot.x, light.spot.y, dot(-l, light.direction.xyz));
+        }
+        let radiance = light.color.rgb * attenuation * spot;
+        if (all(radiance <= vec3<f32>(0.0))) {
+            continue;
+        }
+        let shadow = shadow_factor(light, in.world);
+        irradiance += radiance * shadow * max(dot(n, l), 0.0);
+        specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
+    }
+
+    var out: GBuffer;
+    out.diffuse = vec4<f32>(albedo * (irradiance + lights.ambient.rgb), 1.0);
+    out.specular = vec4<f32>(specular, 1.0);
+    out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
+    out.sss = vec2<f32>(object.params.y, object.params.z);
+    return out;
+}

@@ -1,0 +1,15 @@
+//! One module per pass, each with its WGSL beside it.
+
+pub mod lighting;
+pub mod shadow;
+pub mod sss;
+pub mod tonemap;
+
+/// Every WGSL program of the crate as compiled (name, full source). The naga unit test
+/// validates each of them without a GPU.
+pub const ALL_SHADERS: &[(&str, &str)] = &[
+    ("shadow.wgsl", shadow::SHADER),
+    ("lighting.wgsl", lighting::SHADER),
+    ("tonemap.wgsl", tonemap::SHADER),
+    ("sss.wgsl", sss::SHADER),
+];

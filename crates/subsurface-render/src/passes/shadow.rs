@@ -1,0 +1,239 @@
+//! Shadow maps that store linear light distance (scene units) in an R32Float array texture.
+//! Jimenez et al. 2010 read thickness from exactly such standard maps, so transmittance needs
+//! no extra shadow data.
+
+use wgpu::util::DeviceExt;
+
+use crate::error::RenderError;
+use crate::gpu::GpuContext;
+use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
+use crate::timing::TimedPass;
+use crate::uniforms::{ShadowViewUniform, mat, v4};
+
+pub const SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("shadow.wgsl"));
+pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
+pub struct ShadowPass {
+    pipeline: wgpu::RenderPipeline,
+    layers: Vec<(ShadowLayer, wgpu::BindGroup, wgpu::TextureView)>,
+    depth: wgpu::TextureView,
+    /// All shadow maps: one layer per spot/directional light, six per point light.
+    pub atlas: wgpu::Texture,
+    pub atlas_view: wgpu::TextureView,
+}
+
+impl ShadowPass {
+    pub fn new(
+        ctx: &GpuContext,
+        object_layout: &wgpu::BindGroupLayout,
+        layers: &[ShadowLayer],
+        atlas_size: u32,
+        light_kinds: &[[f32; 4]],
+    ) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let limits = device.limits();
+        if atlas_size > limits.max_texture_dimension_2d {
+            return Err(RenderError::invalid(
+                "lights.shadow_map_size",
+                format!(
+                    "{atlas_size} exceeds this device's limit {}",
+                    limits.max_texture_dimension_2d
+                ),
+            ));
+        }
+        if layers.len() as u32 > limits.max_texture_array_layers {
+            return Err(RenderError::invalid(
+                "lights",
+                format!(
+                    "{} shadow layers exceed this device's limit {}",
+                    layers.len(),
+                    limits.max_texture_array_layers
+                ),
+            ));
+        }
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shadow.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow view"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shadow"),
+            bind_group_layouts: &[Some(&view_layout), Some(object_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(VERTEX_LAYOUT)],
+            },
+            // No culling: thickness needs the surface nearest the light whichever way it faces.
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let layer_count = layers.len().max(1) as u32;
+        let size = atlas_size.max(1);
+        let atlas = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow atlas"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: layer_count,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let atlas_view = atlas.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let depth = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow depth"),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Depth32Float,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+        let layers = layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let kind = light_kinds[l.light];
+                let u = ShadowViewUniform {
+                    view_proj: mat(l.view_proj),
+                    light_position: v4(l.origin, kind[0]),
+                    light_direction: [kind[1], kind[2], kind[3], 0.0],
+                    _pad: Default::default(),
+                };
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("shadow view"),
+                    contents: bytemuck::bytes_of(&u),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shadow view"),
+                    layout: &view_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                let view = atlas.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: i as u32,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                });
+                (l.clone(), bg, view)
+            })
+            .collect();
+        Ok(Self {
+            pipeline,
+            layers,
+            depth,
+            atlas,
+            atlas_view,
+        })
+    }
+
+    /// Number of shadow-map layers rendered each frame.
+    pub fn layer_count(&self) -> usize {
+        self.layers.len()
+    }
+
+    /// Renders every shadow layer, each in its own timed render pass named "shadow".
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        objects: &[GpuObject],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        for (layer, bind_group, view) in &self.layers {
+            let timer = TimedPass::begin(profiler, "shadow", encoder);
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("shadow"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        // Empty texels read as infinitely far: nothing occludes there.
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: f32::MAX as f64,
+                                g: 0.0,
+                                b: 0.0,
+                                a: 0.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &self.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: timer.writes(),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_viewport(0.0, 0.0, layer.size as f32, layer.size as f32, 0.0, 1.0);
+                pass.set_scissor_rect(0, 0, layer.size, layer.size);
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, bind_group, &[]);
+                for o in objects {
+                    o.draw(&mut pass);
+                }
+            }
+            timer.end(profiler, encoder);
+        }
+    }
+}

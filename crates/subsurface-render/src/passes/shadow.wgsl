@@ -1,0 +1,29 @@
+// Shadow pass: renders one shadow-map layer per spot/directional light and six per point
+// light, storing linear light distance (not projected z) so transmittance can use it.
+
+struct ShadowView {
+    view_proj: mat4x4<f32>,
+    light_position: vec4<f32>, // xyz, w = kind
+    light_direction: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> shadow_view: ShadowView;
+
+struct ShadowOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> ShadowOut {
+    var out: ShadowOut;
+    let world = object.model * vec4<f32>(v.position, 1.0);
+    out.world = world.xyz;
+    out.clip = shadow_view.view_proj * world;
+    return out;
+}
+
+@fragment
+fn fs_main(in: ShadowOut) -> @location(0) f32 {
+    return light_distance(shadow_view.light_position, shadow_view.light_direction.xyz, in.world);
+}

@@ -1,0 +1,192 @@
+// Screen-space subsurface scattering (Jimenez et al. 2009, GPU Pro 2010; Separable SSS 2015;
+// Hable et al. 2009's 13 taps). All passes share one rule for fetching a tap, written to match
+// subsurface_profile::oracle exactly: bilinear filtering of texels that were each corrected
+// first (non-skin texels and texels across a depth edge are pulled back to the centre colour).
+
+const MAX_TAPS: u32 = 64u;
+
+struct SssUniform {
+    dir: vec4<f32>,        // xy = pixel direction of a 1-D pass, z = sigma in mm (Gaussian passes)
+    params: vec4<f32>,     // focal length in px, edge_mm, follow surface (0/1), min sigma in px
+    counts: vec4<u32>,     // x = number of kernel taps
+    kernel: array<vec4<f32>, MAX_TAPS>, // separable: rgb weight, offset mm; hable: rgb, x, y in two entries
+};
+
+@group(0) @binding(0) var<uniform> u: SssUniform;
+@group(0) @binding(1) var color_tex: texture_2d<f32>;
+@group(0) @binding(2) var depth_tex: texture_2d<f32>;
+@group(0) @binding(3) var sss_tex: texture_2d<f32>;
+@group(0) @binding(5) var accum_tex: texture_2d<f32>;
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    var out: FullscreenOut;
+    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
+    return out;
+}
+
+struct Centre {
+    color: vec3<f32>,
+    depth: f32,
+    strength: f32,
+    world_per_mm: f32,
+    px_per_mm: f32,
+};
+
+fn centre(p: vec2<f32>) -> Centre {
+    let texel = vec2<i32>(p);
+    var c: Centre;
+    c.color = textureLoad(color_tex, texel, 0).rgb;
+    c.depth = textureLoad(depth_tex, texel, 0).r;
+    let s = textureLoad(sss_tex, texel, 0).rg;
+    c.strength = s.r;
+    c.world_per_mm = s.g;
+    // Perspective-correct footprint: a millimetre on the skin covers focal / depth pixels per
+    // scene unit, so the blur keeps its physical size at any distance and resolution. The
+    // per-pixel strength scales it, as the alpha channel does in Jimenez's shaders.
+    c.px_per_mm = c.world_per_mm * u.params.x / max(c.depth, 1e-6) * c.strength;
+    return c;
+}
+
+// One texel's colour as a tap sees it: a texel that is not skin, or (with follow-surface) lies
+// on another surface, is pulled back to the centre colour, so neither background nor a
+// different surface bleeds in (no halo at silhouettes; the depth correction of Jimenez et al.
+// 2009 with the threshold in millimetres on the skin rather than a unitless constant).
+fn corrected(texel: vec2<i32>, c: Centre) -> vec3<f32> {
+    let color = textureLoad(color_tex, texel, 0).rgb;
+    let depth = textureLoad(depth_tex, texel, 0).r;
+    let strength = textureLoad(sss_tex, texel, 0).r;
+    var s = 0.0;
+    if (strength <= 0.0) {
+        s = 1.0;
+    } else if (u.params.z > 0.5) {
+        s = min(abs(c.depth - depth) / (u.params.y * c.world_per_mm), 1.0);
+    }
+    return mix(color, c.color, s);
+}
+
+// Bilinear filtering done by hand over corrected texels: a hardware-filtered fetch would mix a
+// background texel into a skin tap before any correction could see it. Texels with zero
+// weight are not loaded, so a 1-D pass reads two texels per tap.
+fn tap(p: vec2<f32>, c: Centre) -> vec3<f32> {
+    let last = vec2<i32>(textureDimensions(color_tex)) - vec2<i32>(1);
+    let t = p - vec2<f32>(0.5);
+    let i0 = floor(t);
+    let f = t - i0;
+    let a = clamp(vec2<i32>(i0), vec2<i32>(0), last);
+    let b = clamp(vec2<i32>(i0) + vec2<i32>(1), vec2<i32>(0), last);
+    var top = corrected(a, c);
+    if (f.x > 0.0) {
+        top = mix(top, corrected(vec2<i32>(b.x, a.y), c), f.x);
+    }
+    if (f.y > 0.0) {
+        var bottom = corrected(vec2<i32>(a.x, b.y), c);
+        if (f.x > 0.0) {
+            bottom = mix(bottom, corrected(b, c), f.x);
+        }
+        top = mix(top, bottom, f.y);
+    }
+    return top;
+}
+
+// Separable SSS (2015): one 1-D pass of the kernel; run horizontally, then vertically.
+@fragment
+fn fs_separable(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = centre(in.clip.xy);
+    if (c.strength <= 0.0) {
+        return vec4<f32>(c.color, 1.0);
+    }
+    var sum = u.kernel[0].rgb * c.color;
+    let n = min(u.counts.x, MAX_TAPS);
+    for (var i = 1u; i < n; i++) {
+        let k = u.kernel[i];
+        sum += k.rgb * tap(in.clip.xy + u.dir.xy * (k.w * c.px_per_mm), c);
+    }
+    return vec4<f32>(sum, 1.0);
+}
+
+const G7_W = array<f32, 7>(0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006);
+
+fn gaussian7(p: vec2<f32>) -> vec3<f32> {
+    let c = centre(p);
+    if (c.strength <= 0.0) {
+        return c.color;
+    }
+    let sigma_px = u.dir.z * c.px_per_mm;
+    // GPU Pro's distance-based removal: a sub-pixel Gaussian changes nothing visible.
+    if (sigma_px < u.params.w) {
+        return c.color;
+    }
+    var sum = G7_W[3] * c.color;
+    for (var j = 0; j < 7; j++) {
+        if (j == 3) {
+            continue;
+        }
+        sum += G7_W[j] * tap(p + u.dir.xy * (f32(j - 3) * sigma_px), c);
+    }
+    return sum;
+}
+
+// Six-Gaussian (2009 / GPU Pro): horizontal 7-tap pass of one Gaussian's variance increment.
+@fragment
+fn fs_gaussian(in: FullscreenOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(gaussian7(in.clip.xy), 1.0);
+}
+
+struct GaussianAccumOut {
+    @location(0) blurred: vec4<f32>,
+    // Weighted by the Gaussian's RGB weights and added to the accumulation target by
+    // additive blending, so no buffer per Gaussian is kept (GPU Pro's blending pipeline; the
+    // weights are applied here rather than as a blend constant, whose precision is not
+    // guaranteed).
+    @location(1) accum: vec4<f32>,
+};
+
+@fragment
+fn fs_gaussian_accumulate(in: FullscreenOut) -> GaussianAccumOut {
+    let b = vec4<f32>(gaussian7(in.clip.xy), 1.0);
+    var out: GaussianAccumOut;
+    out.blurred = b;
+    out.accum = vec4<f32>(b.rgb * u.kernel[0].rgb, 1.0);
+    return out;
+}
+
+// The narrowest Gaussian is the unblurred input times its weights: starts the accumulation.
+@fragment
+fn fs_copy(in: FullscreenOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureLoad(color_tex, vec2<i32>(in.clip.xy), 0).rgb * u.kernel[0].rgb, 1.0);
+}
+
+// Writes the accumulated result back into the diffuse target, on skin pixels only, so every
+// other pixel stays bit-identical.
+@fragment
+fn fs_resolve(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let texel = vec2<i32>(in.clip.xy);
+    if (textureLoad(sss_tex, texel, 0).r <= 0.0) {
+        discard;
+    }
+    return vec4<f32>(textureLoad(accum_tex, texel, 0).rgb, 1.0);
+}
+
+// Hable et al. 2009: one 2-D pass with 13 jittered taps; kernel[2i] = rgb weight,
+// kernel[2i + 1].xy = offset in mm.
+@fragment
+fn fs_hable13(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = centre(in.clip.xy);
+    if (c.strength <= 0.0) {
+        return vec4<f32>(c.color, 1.0);
+    }
+    var sum = u.kernel[0].rgb * c.color;
+    let n = min(u.counts.x, MAX_TAPS / 2u);
+    for (var i = 1u; i < n; i++) {
+        let w = u.kernel[2u * i].rgb;
+        let o = u.kernel[2u * i + 1u].xy;
+        sum += w * tap(in.clip.xy + o * c.px_per_mm, c);
+    }
+    return vec4<f32>(sum, 1.0);
+}

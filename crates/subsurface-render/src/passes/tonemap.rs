@@ -1,0 +1,196 @@
+//! Composite (diffuse after subsurface scattering + specular) and filmic tone mapping into an
+//! sRGB target. Usable on its own: give it your own radiance textures.
+
+use wgpu::util::DeviceExt;
+
+use crate::timing::TimedPass;
+
+pub const SHADER: &str = include_str!("tonemap.wgsl");
+/// The output format the renderer uses for PNGs.
+pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// What the final image shows: the composite, or one of the SSS inputs for debugging.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DebugView {
+    #[default]
+    Final,
+    /// SSS strength mask (white = skin)
+    Mask,
+    /// Linear depth, divided by the camera's far plane
+    Depth,
+    /// Diffuse radiance after SSS
+    Diffuse,
+    /// Diffuse radiance before SSS (the SSS passes are skipped)
+    DiffuseBeforeSss,
+    /// Specular radiance only
+    Specular,
+}
+
+impl DebugView {
+    fn code(self) -> f32 {
+        match self {
+            DebugView::Final => 0.0,
+            DebugView::Mask => 1.0,
+            DebugView::Depth => 2.0,
+            DebugView::Diffuse | DebugView::DiffuseBeforeSss => 3.0,
+            DebugView::Specular => 4.0,
+        }
+    }
+}
+
+/// Texture views the tone-map pass reads (all the same size as the output).
+pub struct ToneMapInputs<'a> {
+    /// Linear diffuse radiance, any float format.
+    pub diffuse: &'a wgpu::TextureView,
+    /// Linear specular radiance, any float format.
+    pub specular: &'a wgpu::TextureView,
+    /// Linear depth (R32Float), only read by the depth debug view.
+    pub depth: &'a wgpu::TextureView,
+    /// SSS strength (R of an R/Rg float texture), only read by the mask debug view.
+    pub sss: &'a wgpu::TextureView,
+}
+
+pub struct ToneMapPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+}
+
+impl ToneMapPass {
+    /// `output_format` is the format of the view given to `encode` (e.g. a swapchain format).
+    pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("tonemap.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let tex = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                tex(1),
+                tex(2),
+                tex(3),
+                tex(4),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tonemap"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tonemap"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(output_format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tonemap params"),
+            contents: bytemuck::cast_slice(&[1.0f32, 0.0, 1.0, 0.0]),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        Self {
+            pipeline,
+            layout,
+            params,
+        }
+    }
+
+    /// Builds the bind group for a set of inputs; keep it while the inputs live.
+    pub fn bind(&self, device: &wgpu::Device, inputs: &ToneMapInputs<'_>) -> wgpu::BindGroup {
+        let view = |binding, v| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(v),
+        };
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tonemap"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                view(1, inputs.diffuse),
+                view(2, inputs.specular),
+                view(3, inputs.depth),
+                view(4, inputs.sss),
+            ],
+        })
+    }
+
+    /// Sets exposure (in EV), the debug view and the far plane (for the depth view).
+    pub fn set_params(&self, queue: &wgpu::Queue, exposure_ev: f32, view: DebugView, far: f32) {
+        queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::cast_slice(&[exposure_ev.exp2(), view.code(), far, 0.0]),
+        );
+    }
+
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        output: &wgpu::TextureView,
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, "tonemap", encoder);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("tonemap"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: output,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        timer.end(profiler, encoder);
+    }
+}

@@ -1,0 +1,72 @@
+// Composite and tone map: diffuse (after subsurface scattering) plus specular, exposure,
+// Hable's filmic curve, written to an sRGB target (the hardware applies the sRGB encode).
+
+struct ToneParams {
+    exposure: vec4<f32>,  // x = 2^EV, y = view (0 final, 1 mask, 2 depth, 3 diffuse, 4 specular), z = far
+};
+
+@group(0) @binding(0) var<uniform> params: ToneParams;
+@group(0) @binding(1) var diffuse_tex: texture_2d<f32>;
+@group(0) @binding(2) var specular_tex: texture_2d<f32>;
+@group(0) @binding(3) var depth_tex: texture_2d<f32>;
+@group(0) @binding(4) var sss_tex: texture_2d<f32>;
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    // One triangle that covers the screen: no vertex buffer needed.
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    var out: FullscreenOut;
+    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
+    return out;
+}
+
+// John Hable's filmic curve (Uncharted 2), normalised so that the white point maps to 1.
+fn hable(x: vec3<f32>) -> vec3<f32> {
+    let a = 0.15;
+    let b = 0.50;
+    let c = 0.10;
+    let d = 0.20;
+    let e = 0.02;
+    let f = 0.30;
+    return ((x * (a * x + c * b) + d * e) / (x * (a * x + b) + d * f)) - e / f;
+}
+
+fn filmic(x: vec3<f32>) -> vec3<f32> {
+    let white = 11.2;
+    // The factor 2 is Hable's exposure bias, so that mid grey lands mid screen.
+    return hable(2.0 * x) / hable(vec3<f32>(white));
+}
+
+@fragment
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = vec2<i32>(in.clip.xy);
+    let diffuse = textureLoad(diffuse_tex, p, 0).rgb;
+    let specular = textureLoad(specular_tex, p, 0).rgb;
+    let view = u32(params.exposure.y);
+    var c: vec3<f32>;
+    switch view {
+        case 1u: {
+            let s = textureLoad(sss_tex, p, 0).r;
+            return vec4<f32>(vec3<f32>(s), 1.0);
+        }
+        case 2u: {
+            let d = textureLoad(depth_tex, p, 0).r / params.exposure.z;
+            return vec4<f32>(vec3<f32>(clamp(d, 0.0, 1.0)), 1.0);
+        }
+        case 3u: {
+            c = diffuse;
+        }
+        case 4u: {
+            c = specular;
+        }
+        default: {
+            c = diffuse + specular;
+        }
+    }
+    let mapped = filmic(max(c, vec3<f32>(0.0)) * params.exposure.x);
+    return vec4<f32>(clamp(mapped, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+}

@@ -1,0 +1,210 @@
+//! GPU tests of the foundation (shadow maps, lighting, tone map) on whatever adapter wgpu
+//! finds: lavapipe in CI. Images are small so the software rasteriser stays fast.
+
+mod common;
+
+use common::{context, masked_mean, scene};
+use subsurface_render::{DebugView, RenderOptions, Renderer};
+
+fn options(w: u32, h: u32) -> RenderOptions {
+    RenderOptions {
+        width: w,
+        height: h,
+        exposure_ev: 0.0,
+        view: DebugView::Final,
+    }
+}
+
+fn luminance(c: [f32; 4]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+#[test]
+fn lit_sphere_is_brighter_on_the_lit_side() {
+    let Some(ctx) = context() else { return };
+    let s = scene(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 3.0]
+        target = [0.0, 0.0, 0.0]
+        fov_y_deg = 30.0
+        [render]
+        ambient = [0.0, 0.0, 0.0]
+        [[lights]]
+        kind = "directional"
+        position = [5.0, 0.0, 0.0]
+        target = [0.0, 0.0, 0.0]
+        intensity = 2.0
+        [[objects]]
+        mesh = { shape = "sphere", radius = 0.5 }
+        "#,
+    );
+    let (w, h) = (96, 96);
+    let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+    r.render().unwrap();
+    let diffuse: Vec<f32> = r
+        .read_diffuse()
+        .unwrap()
+        .into_iter()
+        .map(luminance)
+        .collect();
+    let depth = r.read_linear_depth().unwrap();
+    let on_sphere = |i: usize| depth[i] < 10.0;
+    let right = masked_mean(&diffuse, |i| on_sphere(i) && (i as u32 % w) > w / 2 + 4);
+    let left = masked_mean(&diffuse, |i| on_sphere(i) && (i as u32 % w) < w / 2 - 4);
+    assert!(right > 0.2, "lit side too dark: {right}");
+    assert!(left < 0.02 * right, "unlit side {left} vs lit side {right}");
+}
+
+/// A receiver slab lit by a light on the camera's side, with and without a sphere between
+/// them: the shadowed part of the receiver must be much darker, for every kind of light.
+#[test]
+fn shadow_caster_darkens_the_receiver() {
+    let Some(ctx) = context() else { return };
+    for kind in ["spot", "point", "directional"] {
+        let render = |with_caster: bool| {
+            let caster = if with_caster {
+                r#"
+                [[objects]]
+                mesh = { shape = "sphere", radius = 0.2 }
+                translation = [0.25, 0.25, 1.5]
+                "#
+            } else {
+                ""
+            };
+            let s = scene(&format!(
+                r#"
+                [camera]
+                position = [0.0, 0.0, 4.0]
+                target = [0.0, 0.0, 0.0]
+                fov_y_deg = 40.0
+                [render]
+                ambient = [0.0, 0.0, 0.0]
+                [[lights]]
+                kind = "{kind}"
+                position = [0.5, 0.5, 3.0]
+                target = [0.0, 0.0, 0.0]
+                intensity = {}
+                outer_angle_deg = 40.0
+                inner_angle_deg = 30.0
+                shadow_map_size = 256
+                [[objects]]
+                mesh = {{ shape = "slab", width = 3.0, height = 3.0, thickness = 0.05 }}
+                {caster}
+                "#,
+                if kind == "directional" { 1.0 } else { 9.0 }
+            ));
+            let (w, h) = (64, 64);
+            let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+            r.render().unwrap();
+            let d = r.read_diffuse().unwrap();
+            // The light projects the caster's centre onto the receiver at about (0, 0): the
+            // middle of the image, while the caster itself is seen further up and right.
+            luminance(d[(h / 2 * w + w / 2) as usize])
+        };
+        let lit = render(false);
+        let shadowed = render(true);
+        assert!(lit > 0.1, "{kind}: receiver not lit: {lit}");
+        assert!(
+            shadowed < 0.15 * lit,
+            "{kind}: shadowed {shadowed} vs lit {lit}"
+        );
+    }
+}
+
+#[test]
+fn linear_depth_matches_camera_distance() {
+    let Some(ctx) = context() else { return };
+    let s = scene(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 2.0]
+        target = [0.0, 0.0, 0.0]
+        fov_y_deg = 40.0
+        far = 50.0
+        [[lights]]
+        kind = "point"
+        position = [0.0, 0.0, 1.0]
+        [[objects]]
+        mesh = { shape = "slab", width = 1.0, height = 1.0, thickness = 0.1 }
+        "#,
+    );
+    let (w, h) = (64, 48);
+    let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+    r.render().unwrap();
+    let depth = r.read_linear_depth().unwrap();
+    // Front face at z = 0.05, camera at z = 2 looking down -z: linear (view) depth 1.95
+    // everywhere on the face, not only at the centre (it is not the Euclidean distance).
+    for (x, y) in [
+        (w / 2, h / 2),
+        (w / 2 + 8, h / 2 - 6),
+        (w / 2 - 10, h / 2 + 5),
+    ] {
+        let d = depth[(y * w + x) as usize];
+        assert!(
+            (d - 1.95).abs() < 1e-4,
+            "depth at ({x},{y}) = {d}, expected 1.95"
+        );
+    }
+    assert_eq!(depth[0], 50.0, "background should hold the far plane");
+    let sss = r.read_sss().unwrap();
+    assert_eq!(sss[0][0], 0.0, "background is not skin");
+    assert!(
+        sss[(h / 2 * w + w / 2) as usize][0] > 0.0,
+        "slab has the default skin material"
+    );
+}
+
+#[test]
+fn validation_errors_are_returned_not_logged() {
+    let Some(ctx) = context() else { return };
+    ctx.check().unwrap();
+    // MAP_READ may only be combined with COPY_DST: wgpu reports a validation error.
+    let _bad = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("deliberately invalid"),
+        size: 16,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::VERTEX,
+        mapped_at_creation: false,
+    });
+    let err = ctx.check().expect_err("validation error was swallowed");
+    assert!(err.to_string().contains("validation"), "{err}");
+    assert!(
+        !err.to_string().contains('\n'),
+        "error is not one line: {err}"
+    );
+    ctx.check().expect("errors are reported once");
+}
+
+#[test]
+fn sizes_outside_the_device_limit_are_errors() {
+    let Some(ctx) = context() else { return };
+    let s = subsurface_render::Scene::default_scene();
+    let max = ctx.max_texture_size();
+    for (w, h) in [(0, 64), (64, 0), (max + 1, 64)] {
+        let err = Renderer::new(&ctx, &s, options(w, h))
+            .err()
+            .expect("accepted a bad size");
+        let msg = err.to_string();
+        assert!(msg.contains("width") || msg.contains("height"), "{msg}");
+    }
+}
+
+#[test]
+fn timestamps_report_each_pass() {
+    let Some(ctx) = context() else { return };
+    if !ctx.has_timestamps() {
+        eprintln!("adapter has no timestamp queries");
+        return;
+    }
+    let s = subsurface_render::Scene::default_scene();
+    let mut r = Renderer::new(&ctx, &s, options(64, 64)).unwrap();
+    let frame = r.render().unwrap();
+    for name in ["shadow", "lighting", "tonemap"] {
+        let t = frame
+            .timings
+            .iter()
+            .find(|t| t.name == name)
+            .unwrap_or_else(|| panic!("no {name} timing"));
+        assert!(t.ms >= 0.0 && t.ms.is_finite(), "{name}: {}", t.ms);
+    }
+}
