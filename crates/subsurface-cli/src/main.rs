@@ -38,9 +38,11 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // wgpu_hal reports adapters it could not open (e.g. EGL without a display) as errors
+    // even when another backend works; they are noise unless debugging (-vv).
     let level = match cli.verbose {
-        0 => "warn",
-        1 => "info",
+        0 => "warn,wgpu_hal=off",
+        1 => "info,wgpu_hal=off,naga=warn,wgpu_core=warn",
         _ => "debug",
     };
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(level))

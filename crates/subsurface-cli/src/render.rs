@@ -5,6 +5,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use subsurface_render::passes::sss::{SssConfig, SssMethod};
+use subsurface_render::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
 use subsurface_render::{DebugView, GpuContext, RenderOptions, Renderer, Scene};
 
 use crate::output::PendingFile;
@@ -33,6 +35,144 @@ pub struct RenderArgs {
     /// What to write: the final image or an intermediate buffer.
     #[arg(long, value_enum, default_value = "final")]
     pub view: ViewArg,
+    #[command(flatten)]
+    pub sss: SssArgs,
+    #[command(flatten)]
+    pub transmittance: TransmittanceArgs,
+}
+
+/// Light through thin parts (ears, nostrils, fingers), shared by `render` and `bench`.
+#[derive(Args, Debug, Clone)]
+pub struct TransmittanceArgs {
+    /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
+    /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
+    /// term of the screen/texture-space report, off = none.
+    #[arg(long, value_enum, default_value = "paper")]
+    pub transmittance: TransmittanceArg,
+    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub thickness_filter: u32,
+    /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
+    /// (default: the scene's render.normal_shrink, 0.005 unless set).
+    #[arg(long, value_name = "UNITS")]
+    pub normal_shrink: Option<f32>,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransmittanceArg {
+    Paper,
+    Beer,
+    SeedReport,
+    Off,
+}
+
+impl TransmittanceArgs {
+    pub fn config(&self, scene: &Scene) -> Result<TransmittanceConfig> {
+        let c = TransmittanceConfig {
+            method: match self.transmittance {
+                TransmittanceArg::Paper => TransmittanceMethod::Paper,
+                TransmittanceArg::Beer => TransmittanceMethod::Beer,
+                TransmittanceArg::SeedReport => TransmittanceMethod::SeedReport,
+                TransmittanceArg::Off => TransmittanceMethod::Off,
+            },
+            normal_shrink: self
+                .normal_shrink
+                .unwrap_or(scene.desc.render.normal_shrink),
+            thickness_filter: self.thickness_filter,
+        };
+        c.validate()
+            .map_err(|e| anyhow::anyhow!("--{}", e.to_string().replace('_', "-")))?;
+        Ok(c)
+    }
+}
+
+/// Screen-space subsurface-scattering options, shared by `render` and `bench`.
+#[derive(Args, Debug, Clone)]
+pub struct SssArgs {
+    /// Screen-space SSS method: gaussian6 = Jimenez et al. 2009 / GPU Pro (five Gaussians, H+V
+    /// 7-tap blurs each), separable = Jimenez et al. 2015 (one H and one V pass), hable13 =
+    /// Hable et al. 2009 (one 2-D pass of 13 taps), none = no scattering.
+    #[arg(long, value_enum, default_value = "separable")]
+    pub sss: SssArg,
+    /// Separable: number of kernel taps (odd, 3..=63).
+    #[arg(long, default_value_t = 17, value_name = "N")]
+    pub samples: u32,
+    /// Scene units per profile millimetre for every skin object, overriding what each object's
+    /// mm_per_unit and sss_width give (e.g. 0.001 for a model in metres at physical size).
+    #[arg(long, value_name = "UNITS")]
+    pub sss_width: Option<f32>,
+    /// Separable: per-channel kernel strength R,G,B in 0..=1 (default: the first skin
+    /// material's kernel_strength, 0.48,0.41,0.28).
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub strength: Option<[f32; 3]>,
+    /// Separable: per-channel falloff R,G,B (default: the first skin material's, 1,0.37,0.3).
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub falloff: Option<[f32; 3]>,
+    /// Let the blur cross depth edges (turns off the depth-difference correction).
+    #[arg(long)]
+    pub no_follow_surface: bool,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SssArg {
+    None,
+    Gaussian6,
+    Separable,
+    Hable13,
+}
+
+impl From<SssArg> for SssMethod {
+    fn from(v: SssArg) -> Self {
+        match v {
+            SssArg::None => SssMethod::None,
+            SssArg::Gaussian6 => SssMethod::Gaussian6,
+            SssArg::Separable => SssMethod::Separable,
+            SssArg::Hable13 => SssMethod::Hable13,
+        }
+    }
+}
+
+/// Parses "r,g,b" into three finite floats.
+pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [r, g, b] if v.iter().all(|x| x.is_finite()) => Ok([*r, *g, *b]),
+        [_, _, _] => Err("values must be finite".into()),
+        _ => Err(format!(
+            "expected three comma-separated numbers R,G,B (got {s:?})"
+        )),
+    }
+}
+
+impl SssArgs {
+    /// Applies the flags to the scene (width override) and returns the pass configuration.
+    pub fn apply(&self, scene: &mut Scene) -> Result<SssConfig> {
+        if let Some(w) = self.sss_width {
+            anyhow::ensure!(
+                w.is_finite() && w > 0.0,
+                "--sss-width: must be finite and > 0 (got {w})"
+            );
+            for o in &mut scene.objects {
+                let scale = o.transform.determinant().abs().cbrt();
+                o.material.sss_width = w * o.mm_per_unit / scale;
+            }
+        }
+        let mut config = SssConfig::for_scene(scene);
+        config.method = self.sss.into();
+        config.samples = self.samples;
+        if let Some(s) = self.strength {
+            config.strength = s;
+        }
+        if let Some(f) = self.falloff {
+            config.falloff = f;
+        }
+        config.follow_surface = !self.no_follow_surface;
+        config.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
+        Ok(config)
+    }
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -43,8 +183,10 @@ pub enum ViewArg {
     Mask,
     /// Linear depth (black = camera, white = far plane)
     Depth,
-    /// Diffuse radiance only
+    /// Diffuse radiance after subsurface scattering
     Diffuse,
+    /// Diffuse radiance before subsurface scattering
+    DiffuseBefore,
     /// Specular radiance only
     Specular,
 }
@@ -56,6 +198,7 @@ impl From<ViewArg> for DebugView {
             ViewArg::Mask => DebugView::Mask,
             ViewArg::Depth => DebugView::Depth,
             ViewArg::Diffuse => DebugView::Diffuse,
+            ViewArg::DiffuseBefore => DebugView::DiffuseBeforeSss,
             ViewArg::Specular => DebugView::Specular,
         }
     }
@@ -99,9 +242,11 @@ pub fn options(
 pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
     let start = Instant::now();
     let pending = PendingFile::create(&args.out)?;
-    let scene = load_scene(args.scene.as_ref(), args.model.as_ref())?;
+    let mut scene = load_scene(args.scene.as_ref(), args.model.as_ref())?;
     let mut opts = options(&scene, args.width, args.height, args.exposure)?;
     opts.view = args.view.into();
+    opts.sss = args.sss.apply(&mut scene)?;
+    opts.transmittance = args.transmittance.config(&scene)?;
     let ctx = GpuContext::new_headless()?;
     if verbose > 0 {
         eprintln!("adapter: {}", ctx.adapter_name());

@@ -12,20 +12,17 @@
 //!   `px_per_mm = wpm * focal_px / dM * m`. Dividing by depth keeps the blur a
 //!   fixed size on the skin (perspective); the factor `m` shrinks the footprint
 //!   with the SSS strength, as `colorM.a` does in Jimenez's shader (003_*).
-//! * A tap at `p`: its colour is the bilinear, clamp-to-edge sample of the pass
-//!   input (as a GPU linear sampler at `uv = p / size`: `t = p - 0.5`,
-//!   `i0 = floor(t)`, `f = t - i0`, indices clamped to `0..size`), see
-//!   [`sample_bilinear`]; its depth and strength are NEAREST samples at
-//!   `clamp(floor(p), 0, size - 1)`, see [`nearest_index`].
-//! * Tap correction (the `lerp(color, colorM, s)` of 003_*'s `BlurPS`):
-//!   `s = 1` if the tap's strength is 0 (no background colour bleeds in); else
-//!   `s = min(|dM - depth_tap| / (edge_mm * wpm), 1)` with `follow_surface`, else
-//!   `s = 0`; then `tap = tap + (colorM - tap) * s`.
+//! * A tap at `p` filters the four texels around it bilinearly with clamp to
+//!   edge (`t = p - 0.5`, `i0 = floor(t)`, `f = t - i0`, indices clamped to
+//!   `0..size`), but each texel is corrected *before* filtering (the
+//!   `lerp(color, colorM, s)` of 003_*'s `BlurPS`, per texel): `s = 1` if the
+//!   texel's strength is 0 (no background colour bleeds in); else
+//!   `s = min(|dM - depth_texel| / (edge_mm * wpm), 1)` with `follow_surface`,
+//!   else `s = 0`; `texel = texel + (colorM - texel) * s`. Texels of zero weight
+//!   are skipped. 003_* filters colour but point-samples depth, which lets up to
+//!   half of a texel across an edge leak into a tap; correcting per texel leaks
+//!   nothing. [`sample_bilinear`] and [`nearest_index`] remain as helpers.
 //! * Sums run in the order documented per pass, in f32.
-//!
-//! Because colour is filtered linearly but depth and strength are point sampled
-//! (as in 003_*), a tap that lands within half a texel of an edge, on the
-//! near side of it, still mixes in up to half of the texel across the edge.
 
 use crate::error::{ProfileError, Result, finite, in_range, positive};
 use crate::gaussian::SumOfGaussians;
@@ -100,10 +97,14 @@ impl ScreenInput {
             }
         }
         for i in 0..n {
-            in_range(&format!("strength[{i}]"), self.strength[i] as f64, 0.0, 1.0)?;
-            if self.strength[i] > 0.0 {
-                positive(&format!("depth[{i}]"), self.depth[i] as f64)?;
-                positive(&format!("world_per_mm[{i}]"), self.world_per_mm[i] as f64)?;
+            let (m, d, s) = (self.strength[i], self.depth[i], self.world_per_mm[i]);
+            // Field names are only formatted on failure: this runs per pixel.
+            if !(0.0..=1.0).contains(&m) {
+                in_range(&format!("strength[{i}]"), m as f64, 0.0, 1.0)?;
+            }
+            if m > 0.0 && !(d > 0.0 && d.is_finite() && s > 0.0 && s.is_finite()) {
+                positive(&format!("depth[{i}]"), d as f64)?;
+                positive(&format!("world_per_mm[{i}]"), s as f64)?;
             }
         }
         Ok(())

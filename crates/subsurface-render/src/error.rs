@@ -18,6 +18,8 @@ pub enum RenderError {
     Readback(String),
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
+    #[error(transparent)]
+    Profile(#[from] subsurface_profile::ProfileError),
 }
 
 impl RenderError {

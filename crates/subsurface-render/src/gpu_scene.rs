@@ -6,7 +6,12 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
+use std::collections::HashMap;
+
 use crate::mesh::Vertex;
+use crate::passes::transmittance::{
+    MaterialCache, MaterialOptics, TransmittanceConfig, lut_texture,
+};
 use crate::scene::{LightDesc, LightKind, Object, Scene};
 use crate::uniforms::{
     CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat, v4,
@@ -52,6 +57,13 @@ pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 count: None,
             },
+            tex(5),
+            wgpu::BindGroupLayoutEntry {
+                binding: 6,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
         ],
     })
 }
@@ -80,7 +92,12 @@ pub fn world_per_mm(object: &Object) -> f32 {
     object.material.sss_width * s / object.mm_per_unit
 }
 
-pub fn object_uniform(object: &Object) -> ObjectUniform {
+/// `optics` gives the material's Beer-Lambert extinction; `lut_range_mm` the T(s) LUT width.
+pub fn object_uniform(
+    object: &Object,
+    optics: &MaterialOptics,
+    lut_range_mm: f32,
+) -> ObjectUniform {
     let m = &object.material;
     ObjectUniform {
         model: mat(object.transform),
@@ -102,6 +119,12 @@ pub fn object_uniform(object: &Object) -> ObjectUniform {
             object.normal_texture.is_some() as u32 as f32,
             object.specular_texture.is_some() as u32 as f32,
             0.0,
+        ],
+        transmit: [
+            optics.sigma_t[0],
+            optics.sigma_t[1],
+            optics.sigma_t[2],
+            lut_range_mm,
         ],
     }
 }
@@ -189,6 +212,14 @@ pub fn upload_objects(
         ..Default::default()
     });
     let mut out = Vec::new();
+    let lut_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("transmittance lut"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    let mut materials = MaterialCache::default();
+    let mut luts: HashMap<String, (wgpu::TextureView, f32)> = HashMap::new();
     for (i, object) in scene.objects.iter().enumerate() {
         if object.mesh.indices.is_empty() {
             continue;
@@ -204,9 +235,20 @@ pub fn upload_objects(
             contents: bytemuck::cast_slice(&object.mesh.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
+        let optics = materials.get(
+            &object.material.profile,
+            &format!("{label}.material.profile"),
+        )?;
+        if !luts.contains_key(&object.material.profile) {
+            luts.insert(
+                object.material.profile.clone(),
+                lut_texture(ctx, &optics.profile)?,
+            );
+        }
+        let (lut, lut_range) = &luts[&object.material.profile];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&label),
-            contents: bytemuck::bytes_of(&object_uniform(object)),
+            contents: bytemuck::bytes_of(&object_uniform(object, &optics, *lut_range)),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let albedo = upload_texture(
@@ -250,6 +292,14 @@ pub fn upload_objects(
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(lut),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::Sampler(&lut_sampler),
                 },
             ],
         });
@@ -304,7 +354,10 @@ fn safe_up(dir: Vec3) -> Vec3 {
 
 /// Light-space matrices and uniforms. Shadow near/far planes are fitted to the scene's
 /// bounding sphere so that depth precision is spent where the geometry is.
-pub fn light_setup(scene: &Scene) -> Result<LightSetup, RenderError> {
+pub fn light_setup(
+    scene: &Scene,
+    transmittance: &TransmittanceConfig,
+) -> Result<LightSetup, RenderError> {
     if scene.desc.lights.len() > MAX_LIGHTS {
         return Err(RenderError::invalid(
             "lights",
@@ -329,6 +382,12 @@ pub fn light_setup(scene: &Scene) -> Result<LightSetup, RenderError> {
     uniform.count = [scene.desc.lights.len() as u32, 0, 0, 0];
     let a = scene.desc.render.ambient;
     uniform.ambient = [a[0], a[1], a[2], 0.0];
+    uniform.transmittance = [
+        transmittance.method.code(),
+        transmittance.normal_shrink,
+        transmittance.thickness_filter as f32,
+        0.0,
+    ];
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {
         let (u, light_layers) = light_uniform(i, l, centre, radius, atlas_size, layers.len());

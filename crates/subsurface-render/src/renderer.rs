@@ -10,6 +10,7 @@ use crate::passes::lighting::{LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssConfig, SssInputs, SssMethod, SssPass};
 use crate::passes::tonemap::{self, DebugView, ToneMapInputs, ToneMapPass};
+use crate::passes::transmittance::TransmittanceConfig;
 use crate::readback;
 use crate::scene::Scene;
 use crate::timing::{self, PassTiming};
@@ -23,6 +24,21 @@ pub struct RenderOptions {
     pub view: DebugView,
     /// Screen-space subsurface scattering settings.
     pub sss: SssConfig,
+    /// Light through thin parts.
+    pub transmittance: TransmittanceConfig,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            exposure_ev: 0.0,
+            view: DebugView::Final,
+            sss: SssConfig::default(),
+            transmittance: TransmittanceConfig::default(),
+        }
+    }
 }
 
 impl RenderOptions {
@@ -35,6 +51,10 @@ impl RenderOptions {
             exposure_ev: r.exposure_ev,
             view: DebugView::Final,
             sss: SssConfig::default(),
+            transmittance: TransmittanceConfig {
+                normal_shrink: r.normal_shrink,
+                ..Default::default()
+            },
         }
     }
 }
@@ -84,10 +104,11 @@ impl Renderer {
                 ),
             ));
         }
+        options.transmittance.validate()?;
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout)?;
-        let lights = gpu_scene::light_setup(scene)?;
+        let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
         let kinds: Vec<[f32; 4]> = (0..scene.desc.lights.len())
             .map(|i| {
                 let l = &lights.uniform.lights[i];

@@ -163,6 +163,9 @@ pub struct RenderDesc {
     pub ambient: [f32; 3],
     /// Background colour (linear RGB).
     pub background: [f32; 3],
+    /// Transmittance: how far (scene units) a shaded point moves inward along its vertex
+    /// normal before the shadow-map lookup (Jimenez et al. 2010 use 0.005).
+    pub normal_shrink: f32,
 }
 
 impl Default for RenderDesc {
@@ -173,6 +176,7 @@ impl Default for RenderDesc {
             exposure_ev: 0.0,
             ambient: [0.02, 0.02, 0.02],
             background: [0.02, 0.02, 0.025],
+            normal_shrink: 0.005,
         }
     }
 }
@@ -648,6 +652,13 @@ impl SceneDesc {
         c.finite("render.exposure_ev", r.exposure_ev)?;
         c.nonneg3("render.ambient", r.ambient)?;
         c.nonneg3("render.background", r.background)?;
+        c.finite("render.normal_shrink", r.normal_shrink)?;
+        if r.normal_shrink < 0.0 {
+            return Err(c.err(
+                "render.normal_shrink",
+                format!("must be >= 0 (got {})", r.normal_shrink),
+            ));
+        }
         // lights
         for (i, l) in self.lights.iter().enumerate() {
             let f = |k: &str| format!("lights[{i}].{k}");

@@ -30,6 +30,8 @@ pub struct LightUniform {
 pub struct LightsUniform {
     pub count: [u32; 4],
     pub ambient: [f32; 4],
+    /// method (0 off, 1 paper, 2 Beer, 3 seed report), normal shrink, thickness filter, unused
+    pub transmittance: [f32; 4],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -44,6 +46,8 @@ pub struct ObjectUniform {
     pub params: [f32; 4],
     /// has albedo map, has normal map, has specular map
     pub flags: [f32; 4],
+    /// Beer-Lambert extinction per mm (rgb), T(s) LUT range in mm
+    pub transmit: [f32; 4],
 }
 
 #[repr(C)]

@@ -12,6 +12,7 @@ fn options(w: u32, h: u32) -> RenderOptions {
         height: h,
         exposure_ev: 0.0,
         view: DebugView::Final,
+        ..Default::default()
     }
 }
 

@@ -365,6 +365,7 @@ fn render_scene_diffuse(ctx: &GpuContext, sss: SssConfig) -> (Vec<[f32; 4]>, Vec
         exposure_ev: 0.0,
         view: DebugView::Final,
         sss,
+        ..Default::default()
     };
     let mut r = Renderer::new(ctx, &s, opts).unwrap();
     r.render().unwrap();
@@ -419,6 +420,7 @@ fn same_image_at_256_and_512_after_downsampling() {
             exposure_ev: 0.0,
             view: DebugView::Final,
             sss: SssConfig::default(),
+            ..Default::default()
         };
         let mut r = Renderer::new(&ctx, &s, opts).unwrap();
         let img = r.render().unwrap().image;

@@ -23,6 +23,9 @@ struct Light {
 struct Lights {
     count: vec4<u32>,      // x = number of lights
     ambient: vec4<f32>,
+    // x = method (0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*),
+    // y = normal shrink (scene units), z = thickness filter width (texels per axis)
+    transmittance: vec4<f32>,
     lights: array<Light, MAX_LIGHTS>,
 };
 
@@ -32,6 +35,7 @@ struct Object {
     albedo: vec4<f32>,     // rgb linear, a = roughness (Beckmann m)
     params: vec4<f32>,     // rho_s, sss strength, scene units per profile mm, translucency
     flags: vec4<f32>,      // has albedo map, has normal map, has specular map, unused
+    transmit: vec4<f32>,   // rgb = Beer-Lambert extinction (1/mm), a = T(s) LUT range in mm
 };
 
 @group(1) @binding(0) var<uniform> object: Object;
@@ -39,6 +43,9 @@ struct Object {
 @group(1) @binding(2) var normal_map: texture_2d<f32>;
 @group(1) @binding(3) var specular_map: texture_2d<f32>;
 @group(1) @binding(4) var material_sampler: sampler;
+// T(s) of the object's material profile (000_*, equation 9), s in mm over the LUT range.
+@group(1) @binding(5) var transmittance_lut: texture_2d<f32>;
+@group(1) @binding(6) var lut_sampler: sampler;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,

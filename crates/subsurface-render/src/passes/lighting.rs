@@ -10,7 +10,11 @@ use crate::gpu_scene::{GpuObject, VERTEX_LAYOUT};
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
-pub const SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("lighting.wgsl"));
+pub const SHADER: &str = concat!(
+    include_str!("common.wgsl"),
+    include_str!("lighting.wgsl"),
+    include_str!("transmittance.wgsl")
+);
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;

@@ -155,6 +155,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     let v = normalize(camera.position.xyz - in.world);
 
     var irradiance = vec3<f32>(0.0);
+    var transmitted = vec3<f32>(0.0);
     var specular = vec3<f32>(0.0);
     let count = min(lights.count.x, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
@@ -179,11 +180,14 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         }
         let shadow = shadow_factor(light, in.world);
         irradiance += radiance * shadow * max(dot(n, l), 0.0);
+        transmitted += radiance * transmittance(light, in.world, n_vertex, l);
         specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
     }
 
     var out: GBuffer;
-    out.diffuse = vec4<f32>(albedo * (irradiance + lights.ambient.rgb), 1.0);
+    // Transmitted light joins the reflected diffuse light before the SSS blur, so the two
+    // are blurred together (000_*).
+    out.diffuse = vec4<f32>(albedo * (irradiance + lights.ambient.rgb + transmitted), 1.0);
     out.specular = vec4<f32>(specular, 1.0);
     out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
     out.sss = vec2<f32>(object.params.y, object.params.z);

@@ -4,6 +4,7 @@ pub mod lighting;
 pub mod shadow;
 pub mod sss;
 pub mod tonemap;
+pub mod transmittance;
 
 /// Every WGSL program of the crate as compiled (name, full source). The naga unit test
 /// validates each of them without a GPU.

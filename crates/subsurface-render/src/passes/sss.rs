@@ -94,6 +94,17 @@ impl Default for SssConfig {
 }
 
 impl SssConfig {
+    /// Defaults, with the kernel strength and falloff of the scene's first skin material (the
+    /// separable kernel is one per frame).
+    pub fn for_scene(scene: &crate::Scene) -> Self {
+        let mut c = Self::default();
+        if let Some(o) = scene.objects.iter().find(|o| o.material.sss_strength > 0.0) {
+            c.strength = o.material.kernel_strength;
+            c.falloff = o.material.falloff;
+        }
+        c
+    }
+
     /// The `subsurface_profile::oracle` parameters equivalent to this configuration.
     pub fn oracle_params(&self, focal_px: f32) -> subsurface_profile::oracle::ScreenParams {
         subsurface_profile::oracle::ScreenParams {
@@ -109,7 +120,7 @@ impl SssConfig {
             strength: self.strength,
             falloff: self.falloff,
         })
-        .map_err(|e| RenderError::invalid("sss", e.to_string()))
+        .map_err(RenderError::from)
     }
 
     pub fn validate(&self) -> Result<(), RenderError> {
@@ -124,7 +135,7 @@ impl SssConfig {
         }
         if !(self.min_sigma_px.is_finite() && self.min_sigma_px >= 0.0) {
             return Err(RenderError::invalid(
-                "sss.min_sigma_px",
+                "min_sigma_px",
                 format!("must be finite and >= 0 (got {})", self.min_sigma_px),
             ));
         }
@@ -263,11 +274,11 @@ impl SssPass {
             })
         };
         let pipelines = vec![
-            make("fs_separable", &[replace.clone()]),
-            make("fs_gaussian", &[replace.clone()]),
-            make("fs_hable13", &[replace.clone()]),
+            make("fs_separable", std::slice::from_ref(&replace)),
+            make("fs_gaussian", std::slice::from_ref(&replace)),
+            make("fs_hable13", std::slice::from_ref(&replace)),
             make("fs_gaussian_accumulate", &[replace.clone(), additive]),
-            make("fs_copy", &[replace.clone()]),
+            make("fs_copy", std::slice::from_ref(&replace)),
             make("fs_resolve", &[replace]),
         ];
         let dummy = device
@@ -382,7 +393,7 @@ impl SssPass {
                     let steps = self.gaussian_steps();
                     let (sigma, weight) = steps[(i - 1) / 2];
                     u.kernel[0] = [weight[0], weight[1], weight[2], 0.0];
-                    let horizontal = (i - 1) % 2 == 0;
+                    let horizontal = (i - 1).is_multiple_of(2);
                     u.dir = if horizontal {
                         [1.0, 0.0, sigma, 0.0]
                     } else {

@@ -1,0 +1,77 @@
+// Transmittance through thin parts, evaluated per light inside the lighting pass
+// (lighting.wgsl calls `transmittance`; shadow_coord and the bindings are declared there).
+
+// Mean linear light distance over an N x N texel footprint around the projected point: the
+// softer thickness that 000_* suggests (a single texel turns shadow-map aliasing into
+// high-frequency transmitted light). Empty texels (nothing seen by the light) are skipped.
+fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> f32 {
+    let size = light.spot.z / light.spot.w;
+    let centre = vec2<i32>(floor(sc.uv * size));
+    let max_texel = vec2<i32>(i32(size) - 1);
+    let h = max(taps, 1) / 2;
+    var sum = 0.0;
+    var n = 0.0;
+    for (var j = -h; j <= h; j++) {
+        for (var i = -h; i <= h; i++) {
+            let texel = clamp(centre + vec2<i32>(i, j), vec2<i32>(0), max_texel);
+            let d = textureLoad(shadow_atlas, texel, sc.layer, 0).r;
+            if (d < 1e30) {
+                sum += d;
+                n += 1.0;
+            }
+        }
+    }
+    return select(-1.0, sum / max(n, 1.0), n > 0.0);
+}
+
+// Light transmitted through thin parts (Jimenez et al. 2010): thickness from the standard
+// linear-depth shadow map, T(s) of the material's profile, back irradiance from the vertex
+// normal. Returns T(s) * E, to be multiplied by the light's radiance and the albedo.
+fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let method = u32(lights.transmittance.x);
+    // Only lights with a shadow map know the thickness: the others add nothing (no glow).
+    if (method == 0u || light.direction.w < 0.0 || object.params.w <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    // Shrink along the vertex normal so points at the silhouette project inside the object
+    // in the shadow map rather than onto background texels (000_*, instead of Green's growing
+    // of the shadow caster).
+    let shrunk = p - n_vertex * lights.transmittance.y;
+    let sc = shadow_coord(light, shrunk);
+    if (!sc.inside) {
+        return vec3<f32>(0.0);
+    }
+    let d_in = shadow_distance(light, sc, i32(lights.transmittance.z));
+    if (d_in < 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
+    // Into the profile's millimetres: scene units per mm (sss width) times translucency.
+    let s_mm = s_units / (object.params.z * object.params.w);
+    var t = vec3<f32>(0.0);
+    switch method {
+        case 1u: {
+            let range = object.transmit.a;
+            let res = f32(textureDimensions(transmittance_lut).x);
+            if (s_mm <= range) {
+                let u = (s_mm / range * (res - 1.0) + 0.5) / res;
+                t = textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, 0.5), 0.0).rgb;
+            }
+        }
+        case 2u: {
+            // Green's Beer-Lambert attenuation exp(-sigma_t s): one layer, no colour shift
+            // with depth beyond what sigma_t gives.
+            t = exp(-object.transmit.rgb * s_mm);
+        }
+        case 3u: {
+            // The ad-hoc falloff of 001_*, proportional to s^-0.6 (its constants are not
+            // given; 0.15 makes 1 mm transmit about as much as the profile does).
+            t = vec3<f32>(min(0.15 / pow(max(s_mm, 1e-3), 0.6), 1.0));
+        }
+        default: {}
+    }
+    // Back irradiance is taken as locally constant from the low-frequency vertex normal;
+    // the 0.3 lets light wrap around thin edges (000_*, Figure 7).
+    let e = max(0.3 + dot(-n_vertex, l), 0.0);
+    return t * e;
+}

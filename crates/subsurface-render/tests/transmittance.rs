@@ -1,0 +1,253 @@
+//! Transmittance through thin parts (Jimenez et al. 2010) measured in rendered images against
+//! the analytic T(s) of the skin profile.
+
+mod common;
+
+use common::{context, scene};
+use subsurface_profile::SumOfGaussians;
+use subsurface_render::passes::sss::{SssConfig, SssMethod};
+use subsurface_render::passes::transmittance::TransmittanceMethod;
+use subsurface_render::{RenderOptions, Renderer, Scene};
+
+const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
+
+/// A scene lit only from behind (-z) by a directional light of irradiance 1, seen from +z.
+fn backlit(object: &str, shadow_map_size: u32) -> Scene {
+    scene(&format!(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 0.3]
+        target = [0.0, 0.0, 0.0]
+        fov_y_deg = 20.0
+        near = 0.05
+        far = 2.0
+        [render]
+        ambient = [0.0, 0.0, 0.0]
+        normal_shrink = {SHRINK}
+        [[lights]]
+        kind = "directional"
+        position = [0.0, 0.0, -1.0]
+        target = [0.0, 0.0, 0.0]
+        intensity = 1.0
+        shadow_map_size = {shadow_map_size}
+        shadow_bias = 0.00005
+        [[objects]]
+        mesh = {object}
+        mm_per_unit = 1000.0
+        [objects.material]
+        albedo = [1.0, 1.0, 1.0]
+        specular = 0.0
+        "#
+    ))
+}
+
+fn render_diffuse(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    method: TransmittanceMethod,
+) -> (Vec<[f32; 4]>, Vec<f32>) {
+    let ctx = context().unwrap();
+    let mut opts = RenderOptions::from_scene(scene);
+    opts.width = w;
+    opts.height = h;
+    opts.sss = SssConfig {
+        method: SssMethod::None,
+        ..Default::default()
+    };
+    opts.transmittance.method = method;
+    let mut r = Renderer::new(&ctx, scene, opts).unwrap();
+    r.render().unwrap();
+    (r.read_diffuse().unwrap(), r.read_linear_depth().unwrap())
+}
+
+fn skin_t(s_mm: f32) -> [f32; 3] {
+    SumOfGaussians::skin()
+        .transmittance(s_mm as f64)
+        .map(|v| v as f32)
+}
+
+/// The prism of 000_* (Figure 6b): 0 mm thick at its left edge, 8 mm at its right.
+#[test]
+fn backlit_wedge_follows_t_of_s() {
+    if context().is_none() {
+        return;
+    }
+    let (length, max_t) = (0.08f32, 0.008f32);
+    let s = backlit(
+        &format!(
+            "{{ shape = \"wedge\", length = {length}, height = 0.04, max_thickness = {max_t} }}"
+        ),
+        2048,
+    );
+    let (w, h) = (256u32, 160u32);
+    let (diffuse, depth) = render_diffuse(&s, w, h, TransmittanceMethod::Paper);
+    let focal = 0.5 * h as f32 / (10f32).to_radians().tan();
+    // Both faces slope by atan(max_t / 2 / length); E = 0.3 + cos(slope) for light along -z.
+    let e = 0.3 + (max_t * 0.5 / length).atan().cos();
+    let y = h / 2;
+    let mut samples = Vec::new(); // (thickness mm, measured T)
+    for x in 0..w {
+        let i = (y * w + x) as usize;
+        if depth[i] > 1.0 {
+            continue; // background
+        }
+        let world_x = (x as f32 + 0.5 - w as f32 * 0.5) * depth[i] / focal;
+        let thickness_mm = (world_x + length * 0.5) / length * max_t * 1000.0;
+        // Skip the ends, where the thickness filter straddles the silhouette.
+        if !(0.4..=7.6).contains(&thickness_mm) {
+            continue;
+        }
+        let d = diffuse[i];
+        samples.push((
+            thickness_mm - SHRINK * 1000.0,
+            [d[0] / e, d[1] / e, d[2] / e],
+        ));
+    }
+    assert!(
+        samples.len() > 80,
+        "too few wedge pixels: {}",
+        samples.len()
+    );
+    let mut worst = 0.0f32;
+    for (s_mm, t) in &samples {
+        let want = skin_t(*s_mm);
+        for c in 0..3 {
+            // Tolerance: 0.02 absolute plus 10% (f16 targets, LUT, shadow-map texels).
+            let err = (t[c] - want[c]).abs();
+            assert!(
+                err < 0.02 + 0.1 * want[c],
+                "s = {s_mm:.2} mm, channel {c}: rendered {} vs T(s) {}",
+                t[c],
+                want[c]
+            );
+            worst = worst.max(err);
+        }
+    }
+    eprintln!(
+        "wedge: {} samples, worst |T_rendered - T(s)| = {worst:.4}",
+        samples.len()
+    );
+    // Monotone: thicker transmits less (allowing f16 noise), and red/green grows with s.
+    for pair in samples.windows(8).step_by(8) {
+        let (a, b) = (pair[0], pair[7]);
+        assert!(
+            b.1[0] <= a.1[0] + 2e-3,
+            "red not decreasing: {a:?} -> {b:?}"
+        );
+    }
+    let ratio = |t: [f32; 3]| t[0] / t[1].max(1e-6);
+    let thin = samples.iter().find(|(s, _)| *s > 0.5).unwrap();
+    let thick = samples.iter().rev().find(|(s, _)| *s < 3.0).unwrap();
+    assert!(
+        ratio(thick.1) > 2.0 * ratio(thin.1),
+        "no yellow-to-red shift: thin {thin:?}, thick {thick:?}"
+    );
+}
+
+#[test]
+fn backlit_slab_transmits_the_analytic_colour() {
+    if context().is_none() {
+        return;
+    }
+    let thickness = 0.003; // 3 mm
+    let s = backlit(
+        &format!("{{ shape = \"slab\", width = 0.05, height = 0.05, thickness = {thickness} }}"),
+        1024,
+    );
+    let (w, h) = (64u32, 64u32);
+    let (diffuse, _) = render_diffuse(&s, w, h, TransmittanceMethod::Paper);
+    let got = diffuse[(h / 2 * w + w / 2) as usize];
+    let want = skin_t(thickness * 1000.0 - SHRINK * 1000.0).map(|t| t * 1.3);
+    for c in 0..3 {
+        assert!(
+            (got[c] - want[c]).abs() < 0.002 + 0.03 * want[c],
+            "channel {c}: {} vs analytic {}",
+            got[c],
+            want[c]
+        );
+    }
+    // Beer-Lambert with skin1's extinction: exp(-sigma_t s) x E.
+    let (diffuse, _) = render_diffuse(&s, w, h, TransmittanceMethod::Beer);
+    let got = diffuse[(h / 2 * w + w / 2) as usize];
+    let sigma_t = [0.772f32, 1.05, 1.49];
+    for c in 0..3 {
+        let want = (-sigma_t[c] * (thickness * 1000.0 - SHRINK * 1000.0)).exp() * 1.3;
+        assert!(
+            (got[c] - want).abs() < 0.002 + 0.03 * want,
+            "beer channel {c}: {} vs {want}",
+            got[c]
+        );
+    }
+}
+
+#[test]
+fn lights_without_shadow_maps_add_no_transmittance() {
+    if context().is_none() {
+        return;
+    }
+    let s = backlit(
+        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }",
+        0,
+    );
+    let (diffuse, depth) = render_diffuse(&s, 64, 64, TransmittanceMethod::Paper);
+    for (d, z) in diffuse.iter().zip(&depth) {
+        if *z < 1.0 {
+            assert_eq!(
+                &d[..3],
+                &[0.0, 0.0, 0.0],
+                "light without shadow map transmitted {d:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn transmittance_reddens_thin_parts_and_stays_finite() {
+    let Some(ctx) = context() else { return };
+    let scene = Scene::default_scene();
+    let render = |method| {
+        let mut opts = RenderOptions::from_scene(&scene);
+        opts.width = 192;
+        opts.height = 108;
+        opts.transmittance.method = method;
+        let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
+        r.render().unwrap();
+        (
+            r.read_diffuse().unwrap(),
+            r.read_specular().unwrap(),
+            r.read_sss().unwrap(),
+        )
+    };
+    let (on, spec, mask) = render(TransmittanceMethod::Paper);
+    let (off, _, _) = render(TransmittanceMethod::Off);
+    for v in on.iter().chain(spec.iter()) {
+        assert!(
+            v.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "NaN, Inf or negative radiance: {v:?}"
+        );
+    }
+    let mean = |img: &[[f32; 4]], c: usize| {
+        let px: Vec<f32> = img
+            .iter()
+            .zip(&mask)
+            .filter(|(_, m)| m[0] > 0.0)
+            .map(|(p, _)| p[c])
+            .collect();
+        px.iter().sum::<f32>() / px.len() as f32
+    };
+    let (r_on, g_on, r_off, g_off) = (mean(&on, 0), mean(&on, 1), mean(&off, 0), mean(&off, 1));
+    eprintln!(
+        "skin mean red {r_off:.4} -> {r_on:.4}, red/green {:.3} -> {:.3}",
+        r_off / g_off,
+        r_on / g_on
+    );
+    assert!(
+        r_on > 1.2 * r_off,
+        "transmittance adds little red: {r_off} -> {r_on}"
+    );
+    assert!(
+        r_on / g_on > 1.1 * (r_off / g_off),
+        "transmitted light is not redder"
+    );
+}
