@@ -1,5 +1,6 @@
 //! `subsurface`: real-time subsurface scattering for skin, from the command line.
 
+mod bench;
 mod cmd_profile;
 mod output;
 mod render;
@@ -30,6 +31,8 @@ struct Cli {
 enum Command {
     /// Render a scene (the embedded default scene if none is given) to a PNG.
     Render(render::RenderArgs),
+    /// Measure GPU time per pass (timestamp queries) for each SSS method and image size.
+    Bench(bench::BenchArgs),
     /// Print the separable SSS kernel (Jimenez et al. 2015) for N taps.
     Kernel(cmd_profile::KernelArgs),
     /// Show a material's diffusion profile, its sum-of-Gaussians fit and T(s); optionally plot them.
@@ -50,6 +53,7 @@ fn main() -> ExitCode {
         .init();
     let result = match &cli.command {
         Command::Render(a) => render::run(a, cli.verbose),
+        Command::Bench(a) => bench::run(a),
         Command::Kernel(a) => cmd_profile::run_kernel(a),
         Command::Profile(a) => cmd_profile::run_profile(a),
     };

@@ -6,6 +6,7 @@ use wgpu_profiler::GpuProfiler;
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
+use crate::passes::copy::CopyPass;
 use crate::passes::lighting::{LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssConfig, SssInputs, SssMethod, SssPass};
@@ -26,6 +27,8 @@ pub struct RenderOptions {
     pub sss: SssConfig,
     /// Light through thin parts.
     pub transmittance: TransmittanceConfig,
+    /// Benchmarks: also time a plain full-screen copy of the diffuse target ("copy").
+    pub baseline_copy: bool,
 }
 
 impl Default for RenderOptions {
@@ -37,6 +40,7 @@ impl Default for RenderOptions {
             view: DebugView::Final,
             sss: SssConfig::default(),
             transmittance: TransmittanceConfig::default(),
+            baseline_copy: false,
         }
     }
 }
@@ -55,6 +59,7 @@ impl RenderOptions {
                 normal_shrink: r.normal_shrink,
                 ..Default::default()
             },
+            baseline_copy: false,
         }
     }
 }
@@ -80,6 +85,7 @@ pub struct Renderer {
     shadow: ShadowPass,
     lighting: LightingPass,
     sss: SssPass,
+    copy: Option<CopyPass>,
     tonemap: ToneMapPass,
     tonemap_bind_group: wgpu::BindGroup,
     output: wgpu::Texture,
@@ -173,12 +179,16 @@ impl Renderer {
         });
         let profiler = timing::new_profiler(device)?;
         ctx.check()?;
+        let copy = options
+            .baseline_copy
+            .then(|| CopyPass::new(device, &targets.diffuse));
         Ok(Self {
             ctx: ctx.clone(),
             targets,
             objects,
             shadow,
             lighting,
+            copy,
             sss,
             tonemap,
             tonemap_bind_group,
@@ -226,6 +236,9 @@ impl Renderer {
             && self.options.sss.method != SssMethod::None
         {
             self.sss.encode(encoder, p);
+        }
+        if let Some(copy) = &self.copy {
+            copy.encode(encoder, p);
         }
         let out = self.output.create_view(&Default::default());
         self.tonemap

@@ -1,5 +1,6 @@
 //! One module per pass, each with its WGSL beside it.
 
+pub mod copy;
 pub mod lighting;
 pub mod shadow;
 pub mod sss;
@@ -13,4 +14,5 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("lighting.wgsl", lighting::SHADER),
     ("tonemap.wgsl", tonemap::SHADER),
     ("sss.wgsl", sss::SHADER),
+    ("copy.wgsl", copy::SHADER),
 ];

@@ -1,0 +1,190 @@
+//! The `subsurface` binary as users run it: outputs, JSON shapes, and one-line errors with a
+//! non-zero exit and no partial file for bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn subsurface(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_subsurface"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("subsurface-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// GPU-dependent commands are checked only where an adapter exists, or when CI requires one.
+fn gpu_available(dir: &Path) -> bool {
+    let out = subsurface(
+        &[
+            "render",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            "probe.png",
+        ],
+        dir,
+    );
+    let ok = out.status.success();
+    if !ok && std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+        panic!(
+            "SUBSURFACE_REQUIRE_GPU=1 but render failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    ok
+}
+
+fn stderr_line(out: &Output) -> String {
+    let s = String::from_utf8_lossy(&out.stderr).to_string();
+    // lavapipe itself prints "error: XDG_RUNTIME_DIR is invalid" without a display; not ours.
+    let lines: Vec<&str> = s
+        .lines()
+        .filter(|l| l.starts_with("error") && !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one error line, got: {s}");
+    assert!(!s.contains("panicked") && !s.contains("backtrace"), "{s}");
+    lines[0].to_string()
+}
+
+#[test]
+fn render_writes_a_png_and_a_summary_line() {
+    let dir = tempdir("render");
+    if !gpu_available(&dir) {
+        return;
+    }
+    let out = subsurface(
+        &[
+            "render", "--width", "96", "--height", "64", "--out", "hand.png",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(dir.join("hand.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (96, 64));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("96x64") && stdout.contains("total"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
+    let dir = tempdir("bad");
+    std::fs::write(
+        dir.join("bad.toml"),
+        "[camera]\nposition = [0, 0, 1]\ntarget = [0, 0, 0]\nbogus = 1\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("corrupt.glb"), b"not a glb").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "missing.toml", "--out", "o.png"],
+            "missing.toml",
+        ),
+        (&["render", "bad.toml", "--out", "o.png"], "bogus"),
+        (
+            &["render", "--model", "corrupt.glb", "--out", "o.png"],
+            "corrupt.glb",
+        ),
+        (&["render", "--width", "0", "--out", "o.png"], "width"),
+        (
+            &["render", "--height", "100000", "--out", "o.png"],
+            "height",
+        ),
+        (&["render", "--samples", "4", "--out", "o.png"], "samples"),
+        (
+            &["render", "--exposure", "nan", "--out", "o.png"],
+            "exposure",
+        ),
+        (&["render", "--out", "no/such/dir/o.png"], "o.png"),
+        (&["kernel", "--samples", "64", "--json"], "samples"),
+    ];
+    for (args, needle) in cases {
+        let out = subsurface(args, &dir);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let line = stderr_line(&out);
+        assert!(line.contains(needle), "{args:?}: {line}");
+        assert!(!dir.join("o.png").exists(), "{args:?} left an output file");
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn kernel_json_has_n_taps_centre_first() {
+    let out = subsurface(
+        &["kernel", "--samples", "11", "--json"],
+        &std::env::temp_dir(),
+    );
+    assert!(out.status.success());
+    let taps: Vec<[f32; 4]> = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(taps.len(), 11);
+    assert_eq!(taps[0][3], 0.0, "centre tap first");
+}
+
+#[test]
+fn bench_json_has_runs_with_positive_times() {
+    let dir = tempdir("bench");
+    if !gpu_available(&dir) {
+        return;
+    }
+    let out = subsurface(
+        &[
+            "bench",
+            "--sizes",
+            "64x48",
+            "--methods",
+            "none,separable",
+            "--warmup",
+            "1",
+            "--frames",
+            "2",
+            "--json",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    for r in runs {
+        assert_eq!(r["characters"], 1);
+        assert!(r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
+        let passes = r["passes"].as_array().unwrap();
+        assert!(
+            passes
+                .iter()
+                .all(|p| p["name"].is_string() && p["ms"].as_f64().unwrap() >= 0.0)
+        );
+    }
+    assert_eq!(runs[1]["sss"], "separable");
+    assert!(
+        runs[1]["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["name"] == "sss")
+    );
+}
