@@ -81,6 +81,7 @@ pub struct Renderer {
     ctx: GpuContext,
     pub options: RenderOptions,
     pub targets: LightingTargets,
+    object_layout: wgpu::BindGroupLayout,
     objects: Vec<GpuObject>,
     shadow: ShadowPass,
     lighting: LightingPass,
@@ -88,10 +89,87 @@ pub struct Renderer {
     copy: Option<CopyPass>,
     tonemap: ToneMapPass,
     tonemap_bind_group: wgpu::BindGroup,
+    /// Tone-map passes for other output formats (a window's swapchain), by format.
+    extra_tonemaps: Vec<(wgpu::TextureFormat, ToneMapPass, wgpu::BindGroup)>,
     output: wgpu::Texture,
     profiler: GpuProfiler,
     background: [f32; 3],
     far: f32,
+    light_kinds: Vec<[f32; 4]>,
+    shadow_signature: Vec<(usize, u32)>,
+    material_names: Vec<String>,
+}
+
+fn check_options(ctx: &GpuContext, options: &RenderOptions) -> Result<(), RenderError> {
+    ctx.check_size("", options.width, options.height)?;
+    if !options.exposure_ev.is_finite() || options.exposure_ev.abs() > 32.0 {
+        return Err(RenderError::invalid(
+            "exposure",
+            format!(
+                "must be finite and within +-32 EV (got {})",
+                options.exposure_ev
+            ),
+        ));
+    }
+    options.transmittance.validate()?;
+    options.sss.validate()
+}
+
+fn light_kinds(lights: &gpu_scene::LightSetup, count: usize) -> Vec<[f32; 4]> {
+    (0..count)
+        .map(|i| {
+            let l = &lights.uniform.lights[i];
+            [
+                l.position[3],
+                l.direction[0],
+                l.direction[1],
+                l.direction[2],
+            ]
+        })
+        .collect()
+}
+
+/// What forces the shadow atlas to be rebuilt: the layers' lights and sizes.
+fn shadow_signature(lights: &gpu_scene::LightSetup) -> Vec<(usize, u32)> {
+    let mut v: Vec<(usize, u32)> = lights.layers.iter().map(|l| (l.light, l.size)).collect();
+    v.push((usize::MAX, lights.atlas_size));
+    v
+}
+
+fn output_texture(ctx: &GpuContext, w: u32, h: u32) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("output"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: tonemap::OUTPUT_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+fn tonemap_inputs<'a>(views: &'a [wgpu::TextureView; 4]) -> ToneMapInputs<'a> {
+    ToneMapInputs {
+        diffuse: &views[0],
+        specular: &views[1],
+        depth: &views[2],
+        sss: &views[3],
+    }
+}
+
+fn target_views(t: &LightingTargets) -> [wgpu::TextureView; 4] {
+    let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+    [
+        view(&t.diffuse),
+        view(&t.specular),
+        view(&t.depth),
+        view(&t.sss),
+    ]
 }
 
 impl Renderer {
@@ -100,32 +178,12 @@ impl Renderer {
         scene: &Scene,
         options: RenderOptions,
     ) -> Result<Self, RenderError> {
-        ctx.check_size("", options.width, options.height)?;
-        if !options.exposure_ev.is_finite() || options.exposure_ev.abs() > 32.0 {
-            return Err(RenderError::invalid(
-                "exposure",
-                format!(
-                    "must be finite and within +-32 EV (got {})",
-                    options.exposure_ev
-                ),
-            ));
-        }
-        options.transmittance.validate()?;
+        check_options(ctx, &options)?;
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout)?;
         let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
-        let kinds: Vec<[f32; 4]> = (0..scene.desc.lights.len())
-            .map(|i| {
-                let l = &lights.uniform.lights[i];
-                [
-                    l.position[3],
-                    l.direction[0],
-                    l.direction[1],
-                    l.direction[2],
-                ]
-            })
-            .collect();
+        let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
             &object_layout,
@@ -143,48 +201,28 @@ impl Renderer {
         );
         let targets = LightingTargets::new(ctx, options.width, options.height);
         let tonemap = ToneMapPass::new(device, tonemap::OUTPUT_FORMAT);
-        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.sss)?;
         sss.bind(
             device,
             &SssInputs {
                 diffuse: &targets.diffuse,
-                depth: &view(&targets.depth),
-                sss: &view(&targets.sss),
+                depth: &views[2],
+                sss: &views[3],
             },
         );
         sss.set_camera(&ctx.queue, camera.params[2]);
-        let tonemap_bind_group = tonemap.bind(
-            device,
-            &ToneMapInputs {
-                diffuse: &view(&targets.diffuse),
-                specular: &view(&targets.specular),
-                depth: &view(&targets.depth),
-                sss: &view(&targets.sss),
-            },
-        );
-        let output = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("output"),
-            size: wgpu::Extent3d {
-                width: options.width,
-                height: options.height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: tonemap::OUTPUT_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let tonemap_bind_group = tonemap.bind(device, &tonemap_inputs(&views));
+        let output = output_texture(ctx, options.width, options.height);
         let profiler = timing::new_profiler(device)?;
-        ctx.check()?;
         let copy = options
             .baseline_copy
             .then(|| CopyPass::new(device, &targets.diffuse));
+        ctx.check()?;
         Ok(Self {
             ctx: ctx.clone(),
             targets,
+            object_layout,
             objects,
             shadow,
             lighting,
@@ -192,12 +230,111 @@ impl Renderer {
             sss,
             tonemap,
             tonemap_bind_group,
+            extra_tonemaps: Vec::new(),
             output,
             profiler,
             background: scene.desc.render.background,
             far: scene.desc.camera.far,
+            light_kinds: kinds,
+            shadow_signature: shadow_signature(&lights),
+            material_names: scene
+                .objects
+                .iter()
+                .map(|o| o.material.profile.clone())
+                .collect(),
             options,
         })
+    }
+
+    /// Applies a changed scene description (camera, lights, materials, transforms) and
+    /// options (size, SSS, transmittance, exposure, view) without reloading meshes or
+    /// textures: the viewer calls this on every edit. The scene's objects must be the same
+    /// meshes as at creation (same count, same order); otherwise create a new `Renderer`.
+    pub fn update(&mut self, scene: &Scene, options: &RenderOptions) -> Result<(), RenderError> {
+        check_options(&self.ctx, options)?;
+        let device = self.ctx.device.clone();
+        let queue = self.ctx.queue.clone();
+        let names: Vec<String> = scene
+            .objects
+            .iter()
+            .map(|o| o.material.profile.clone())
+            .collect();
+        if names != self.material_names {
+            // A different profile needs a different T(s) LUT in the object's bind group.
+            self.objects = gpu_scene::upload_objects(&self.ctx, scene, &self.object_layout)?;
+            self.material_names = names;
+        } else {
+            let mut cache = crate::passes::transmittance::MaterialCache::default();
+            let mut gpu = self.objects.iter();
+            for (i, o) in scene.objects.iter().enumerate() {
+                if o.mesh.indices.is_empty() {
+                    continue;
+                }
+                let Some(g) = gpu.next() else { break };
+                let optics = cache.get(
+                    &o.material.profile,
+                    &format!("objects[{i}].material.profile"),
+                )?;
+                let u = gpu_scene::object_uniform(o, &optics, 6.0);
+                queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
+            }
+        }
+        let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        let kinds = light_kinds(&lights, scene.desc.lights.len());
+        let signature = shadow_signature(&lights);
+        if signature != self.shadow_signature || kinds.len() != self.light_kinds.len() {
+            self.shadow = ShadowPass::new(
+                &self.ctx,
+                &self.object_layout,
+                &lights.layers,
+                lights.atlas_size,
+                &kinds,
+            )?;
+            self.shadow_signature = signature;
+        } else {
+            self.shadow.update_layers(&queue, &lights.layers, &kinds);
+        }
+        self.light_kinds = kinds;
+        let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
+        // The lighting pass binds the shadow atlas, which may be new.
+        self.lighting = LightingPass::new(
+            &self.ctx,
+            &self.object_layout,
+            &camera,
+            &lights.uniform,
+            &self.shadow.atlas_view,
+        );
+        let resized = (options.width, options.height) != (self.options.width, self.options.height);
+        if resized {
+            self.targets = LightingTargets::new(&self.ctx, options.width, options.height);
+            self.output = output_texture(&self.ctx, options.width, options.height);
+            self.extra_tonemaps.clear();
+        }
+        let views = target_views(&self.targets);
+        if resized || options.sss != self.options.sss {
+            self.sss.set_config(&device, &options.sss)?;
+            self.sss.bind(
+                &device,
+                &SssInputs {
+                    diffuse: &self.targets.diffuse,
+                    depth: &views[2],
+                    sss: &views[3],
+                },
+            );
+        }
+        self.sss.set_camera(&queue, camera.params[2]);
+        if resized {
+            self.tonemap_bind_group = self.tonemap.bind(&device, &tonemap_inputs(&views));
+        }
+        if resized || options.baseline_copy != self.copy.is_some() {
+            self.copy = options
+                .baseline_copy
+                .then(|| CopyPass::new(&device, &self.targets.diffuse));
+        }
+        self.background = scene.desc.render.background;
+        self.far = scene.desc.camera.far;
+        self.options = options.clone();
+        self.ctx.check()
     }
 
     pub fn context(&self) -> &GpuContext {
@@ -214,15 +351,9 @@ impl Renderer {
         &self.shadow.atlas
     }
 
-    /// Records one whole frame into `encoder`, ending with the tone-mapped `output` texture.
-    pub fn encode_frame(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Records shadow maps, lighting and SSS: everything up to the HDR targets.
+    pub fn encode_scene(&self, encoder: &mut wgpu::CommandEncoder) {
         let p = Some(&self.profiler);
-        self.tonemap.set_params(
-            &self.ctx.queue,
-            self.options.exposure_ev,
-            self.options.view,
-            self.far,
-        );
         self.shadow.encode(encoder, &self.objects, p);
         self.lighting.encode(
             encoder,
@@ -240,9 +371,79 @@ impl Renderer {
         if let Some(copy) = &self.copy {
             copy.encode(encoder, p);
         }
+    }
+
+    /// Records one whole frame into `encoder`, ending with the tone-mapped `output` texture.
+    pub fn encode_frame(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.tonemap.set_params(
+            &self.ctx.queue,
+            self.options.exposure_ev,
+            self.options.view,
+            self.far,
+        );
+        self.encode_scene(encoder);
         let out = self.output.create_view(&Default::default());
-        self.tonemap
-            .encode(encoder, &self.tonemap_bind_group, &out, p);
+        self.tonemap.encode(
+            encoder,
+            &self.tonemap_bind_group,
+            &out,
+            Some(&self.profiler),
+        );
+    }
+
+    /// Records a whole frame tone-mapped into `view` (e.g. a window's swapchain texture of
+    /// `format`, the same size as the renderer). With `scissor` = [x, y, w, h] only that
+    /// rectangle of `view` is written and the rest is kept: two renderers with different
+    /// settings can share one view for a split-screen comparison.
+    pub fn encode_to_view(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+        scissor: Option<[u32; 4]>,
+    ) {
+        if !self.extra_tonemaps.iter().any(|(f, _, _)| *f == format) {
+            let pass = ToneMapPass::new(&self.ctx.device, format);
+            let bg = pass.bind(
+                &self.ctx.device,
+                &tonemap_inputs(&target_views(&self.targets)),
+            );
+            self.extra_tonemaps.push((format, pass, bg));
+        }
+        let (_, pass, bg) = self
+            .extra_tonemaps
+            .iter()
+            .find(|(f, _, _)| *f == format)
+            .expect("inserted above");
+        pass.set_params(
+            &self.ctx.queue,
+            self.options.exposure_ev,
+            self.options.view,
+            self.far,
+        );
+        self.encode_scene(encoder);
+        pass.encode_scissored(encoder, bg, view, scissor, Some(&self.profiler));
+    }
+
+    /// After `encode_to_view` or `encode_frame`: resolves this frame's timestamp queries into
+    /// `encoder`. Call once per frame before submitting.
+    pub fn resolve_timings(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.profiler.resolve_queries(encoder);
+    }
+
+    /// After submitting: closes the frame and returns the newest finished frame's per-pass
+    /// GPU times, without waiting (None until one is ready).
+    pub fn finish_frame(&mut self) -> Result<Option<Vec<PassTiming>>, RenderError> {
+        self.profiler
+            .end_frame()
+            .map_err(|e| RenderError::Validation(format!("profiler: {e}")))?;
+        let _ = self.ctx.device.poll(wgpu::PollType::Poll);
+        let period = self.ctx.queue.get_timestamp_period();
+        let mut latest = None;
+        while let Some(results) = self.profiler.process_finished_frame(period) {
+            latest = Some(timing::collect(&results));
+        }
+        Ok(latest)
     }
 
     /// Renders a frame on the GPU and waits for it; returns the per-pass GPU times.

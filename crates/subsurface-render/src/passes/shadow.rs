@@ -15,7 +15,12 @@ pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 pub struct ShadowPass {
     pipeline: wgpu::RenderPipeline,
-    layers: Vec<(ShadowLayer, wgpu::BindGroup, wgpu::TextureView)>,
+    layers: Vec<(
+        ShadowLayer,
+        wgpu::BindGroup,
+        wgpu::TextureView,
+        wgpu::Buffer,
+    )>,
     depth: wgpu::TextureView,
     /// All shadow maps: one layer per spot/directional light, six per point light.
     pub atlas: wgpu::Texture,
@@ -143,17 +148,11 @@ impl ShadowPass {
             .iter()
             .enumerate()
             .map(|(i, l)| {
-                let kind = light_kinds[l.light];
-                let u = ShadowViewUniform {
-                    view_proj: mat(l.view_proj),
-                    light_position: v4(l.origin, kind[0]),
-                    light_direction: [kind[1], kind[2], kind[3], 0.0],
-                    _pad: Default::default(),
-                };
+                let u = view_uniform(l, light_kinds);
                 let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("shadow view"),
                     contents: bytemuck::bytes_of(&u),
-                    usage: wgpu::BufferUsages::UNIFORM,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
                 let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("shadow view"),
@@ -169,7 +168,7 @@ impl ShadowPass {
                     array_layer_count: Some(1),
                     ..Default::default()
                 });
-                (l.clone(), bg, view)
+                (l.clone(), bg, view, buffer)
             })
             .collect();
         Ok(Self {
@@ -179,6 +178,24 @@ impl ShadowPass {
             atlas,
             atlas_view,
         })
+    }
+
+    /// Moves the shadow cameras (same layers and sizes as at creation: the viewer moving a
+    /// light). Changed sizes or light counts need a new `ShadowPass`.
+    pub fn update_layers(
+        &mut self,
+        queue: &wgpu::Queue,
+        layers: &[ShadowLayer],
+        light_kinds: &[[f32; 4]],
+    ) {
+        for ((layer, _, _, buffer), new) in self.layers.iter_mut().zip(layers) {
+            *layer = new.clone();
+            queue.write_buffer(
+                buffer,
+                0,
+                bytemuck::bytes_of(&view_uniform(new, light_kinds)),
+            );
+        }
     }
 
     /// Number of shadow-map layers rendered each frame.
@@ -193,7 +210,7 @@ impl ShadowPass {
         objects: &[GpuObject],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        for (layer, bind_group, view) in &self.layers {
+        for (layer, bind_group, view, _) in &self.layers {
             let timer = TimedPass::begin(profiler, "shadow", encoder);
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -235,5 +252,15 @@ impl ShadowPass {
             }
             timer.end(profiler, encoder);
         }
+    }
+}
+
+fn view_uniform(l: &ShadowLayer, light_kinds: &[[f32; 4]]) -> ShadowViewUniform {
+    let kind = light_kinds[l.light];
+    ShadowViewUniform {
+        view_proj: mat(l.view_proj),
+        light_position: v4(l.origin, kind[0]),
+        light_direction: [kind[1], kind[2], kind[3], 0.0],
+        _pad: Default::default(),
     }
 }

@@ -169,8 +169,26 @@ impl ToneMapPass {
         output: &wgpu::TextureView,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
+        self.encode_scissored(encoder, bind_group, output, None, profiler);
+    }
+
+    /// As `encode`, writing only the `scissor` rectangle [x, y, w, h] (the rest of `output`
+    /// is kept) when one is given.
+    pub fn encode_scissored(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        output: &wgpu::TextureView,
+        scissor: Option<[u32; 4]>,
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
         let timer = TimedPass::begin(profiler, "tonemap", encoder);
         {
+            let load = if scissor.is_some() {
+                wgpu::LoadOp::Load
+            } else {
+                wgpu::LoadOp::Clear(wgpu::Color::BLACK)
+            };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("tonemap"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -178,7 +196,7 @@ impl ToneMapPass {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        load,
                         store: wgpu::StoreOp::Store,
                     },
                 })],
@@ -189,6 +207,9 @@ impl ToneMapPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, bind_group, &[]);
+            if let Some([x, y, w, h]) = scissor {
+                pass.set_scissor_rect(x, y, w, h);
+            }
             pass.draw(0..3, 0..1);
         }
         timer.end(profiler, encoder);
