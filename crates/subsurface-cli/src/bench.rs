@@ -1,33 +1,50 @@
-//! `subsurface bench`: GPU time per pass (timestamp queries), medians over many frames.
+//! `subsurface bench`: GPU time per pass (timestamp queries), medians over many frames, for
+//! each image size, number of characters, SSS method and transmittance method.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use glam::{Mat4, Vec3};
+use plotters::prelude::*;
 use serde::Serialize;
 use subsurface_render::passes::sss::SssMethod;
-use subsurface_render::{GpuContext, PassTiming, Renderer};
+use subsurface_render::passes::transmittance::TransmittanceMethod;
+use subsurface_render::{GpuContext, PassTiming, Renderer, Scene};
 
-use crate::render::{SssArg, SssArgs, TransmittanceArgs, load_scene, options};
+use crate::output::PendingFile;
+use crate::render::{SssArg, TransmittanceArg, load_scene, options};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scene file (default: the embedded default scene).
+    /// Scene file (default: the embedded default scene, the hand and the wedge).
     pub scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model.
     #[arg(long, value_name = "FILE.glb")]
     pub model: Option<PathBuf>,
+    /// Image width; with --height, a single size instead of --sizes.
+    #[arg(long, requires = "height")]
+    pub width: Option<u32>,
+    /// Image height; with --width, a single size instead of --sizes.
+    #[arg(long, requires = "width")]
+    pub height: Option<u32>,
     /// Image sizes to measure, WxH, comma-separated.
     #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',', value_parser = parse_size)]
     pub sizes: Vec<(u32, u32)>,
-    /// SSS methods to measure, comma-separated (none, gaussian6, separable, hable13).
-    #[arg(
-        long = "methods",
-        value_enum,
-        value_delimiter = ',',
-        default_value = "none,separable,gaussian6,hable13"
-    )]
-    pub methods: Vec<SssArg>,
+    /// Numbers of characters (copies of the scene's objects, in a grid covering about the
+    /// same screen area at every count), comma-separated.
+    #[arg(long, default_value = "1", value_delimiter = ',')]
+    pub characters: Vec<u32>,
+    /// SSS methods to measure, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "none,separable,gaussian6,hable13")]
+    pub sss: Vec<SssArg>,
+    /// Transmittance methods to measure, comma-separated (e.g. paper,off for the cost of
+    /// transmittance side by side).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "paper")]
+    pub transmittance: Vec<TransmittanceArg>,
+    /// Separable kernel taps.
+    #[arg(long, default_value_t = 17, value_name = "N")]
+    pub samples: u32,
     /// Frames rendered and thrown away before timing (shader compilation, caches).
     #[arg(long, default_value_t = 5)]
     pub warmup: u32,
@@ -37,16 +54,13 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub sss: SssArgs,
-    #[command(flatten)]
-    pub transmittance: TransmittanceArgs,
+    /// Draw GPU time against the number of characters, one line per method.
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once('x')
-        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WxH, got {s:?}"))?;
     let w: u32 = w.trim().parse().map_err(|e| format!("width {w:?}: {e}"))?;
     let h: u32 = h.trim().parse().map_err(|e| format!("height {h:?}: {e}"))?;
     if w == 0 || h == 0 {
@@ -61,17 +75,20 @@ struct Run {
     width: u32,
     height: u32,
     sss: &'static str,
+    transmittance: String,
+    /// Sum of the median per-pass GPU times (copy baseline excluded).
     frame_ms: f64,
     passes: Vec<PassTiming>,
     /// A plain full-screen copy of the diffuse target, measured in the same frames.
     copy_ms: f64,
-    /// SSS GPU time divided by the copy's.
+    /// GPU time of the subsurface-scattering passes divided by the copy's.
     sss_over_copy: Option<f64>,
 }
 
 #[derive(Serialize)]
 struct Report {
     adapter: String,
+    warmup: u32,
     frames: u32,
     runs: Vec<Run>,
 }
@@ -82,126 +99,227 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// `n` copies of the scene's objects on a grid of ceil(sqrt(n)) columns, each scaled by
+/// 1/columns about the scene's centre, so the grid covers about the area of one character.
+pub fn replicate(scene: &Scene, n: u32) -> Scene {
+    if n <= 1 {
+        return scene.clone();
     }
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let size = hi - lo;
+    let cols = (n as f32).sqrt().ceil() as u32;
+    let rows = n.div_ceil(cols);
+    let s = 1.0 / cols as f32;
+    let mut out = scene.clone();
+    out.objects.clear();
+    for k in 0..n {
+        let (c, r) = (k % cols, k / cols);
+        let cell = Vec3::new(
+            (c as f32 + 0.5) / cols as f32 - 0.5,
+            0.5 - (r as f32 + 0.5) / rows.max(cols) as f32,
+            0.0,
+        ) * Vec3::new(size.x, size.y, 0.0);
+        let m = Mat4::from_translation(centre + cell) * Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-centre);
+        for o in &scene.objects {
+            let mut copy = o.clone();
+            copy.transform = m * o.transform;
+            out.objects.push(copy);
+        }
+    }
+    out
+}
+
+/// Passes that belong to subsurface scattering (screen or texture space).
+fn is_sss_pass(name: &str) -> bool {
+    name == "sss" || name.starts_with("texture")
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
-    anyhow::ensure!(
-        args.frames >= 1,
-        "--frames: must be at least 1 (got {})",
-        args.frames
-    );
-    let mut scene = load_scene(args.scene.as_ref(), args.model.as_ref())?;
+    anyhow::ensure!(args.frames >= 1, "--frames: must be at least 1 (got {})", args.frames);
+    for &c in &args.characters {
+        anyhow::ensure!((1..=256).contains(&c), "--characters: each must be in 1..=256 (got {c})");
+    }
+    let sizes = match (args.width, args.height) {
+        (Some(w), Some(h)) => vec![parse_size(&format!("{w}x{h}")).map_err(|e| anyhow::anyhow!("--width/--height: {e}"))?],
+        _ => args.sizes.clone(),
+    };
+    let base = load_scene(args.scene.as_ref(), args.model.as_ref())?;
     let ctx = GpuContext::new_headless()?;
-    anyhow::ensure!(
-        ctx.has_timestamps(),
-        "{}: the adapter has no timestamp queries",
-        ctx.adapter_name()
-    );
-    let sss_base = args.sss.apply(&mut scene)?;
-    let transmittance = args.transmittance.config(&scene)?;
-    let total = (args.sizes.len() * args.methods.len()) as u64 * (args.warmup + args.frames) as u64;
-    let bar = indicatif::ProgressBar::new(total).with_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
-            .expect("static template"),
+    anyhow::ensure!(ctx.has_timestamps(), "{}: the adapter has no timestamp queries", ctx.adapter_name());
+    let pending_plot = args.plot.as_ref().map(|p| PendingFile::create(p)).transpose()?;
+    let configs = sizes.len() * args.characters.len() * args.sss.len() * args.transmittance.len();
+    let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64).with_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}").expect("static template"),
     );
     let mut runs = Vec::new();
-    for &(w, h) in &args.sizes {
-        ctx.check_size("--sizes ", w, h)?;
-        for &method in &args.methods {
-            let method: SssMethod = method.into();
-            bar.set_message(format!("{w}x{h} {}", method.name()));
-            let mut opts = options(&scene, Some(w), Some(h), None)?;
-            opts.sss = sss_base.clone();
-            opts.sss.method = method;
-            opts.transmittance = transmittance.clone();
-            opts.baseline_copy = true;
-            let mut renderer =
-                Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
-            let mut samples: Vec<Vec<PassTiming>> = Vec::new();
-            for i in 0..args.warmup + args.frames {
-                let t = renderer.render_timed()?;
-                if i >= args.warmup {
-                    samples.push(t);
+    for &n in &args.characters {
+        let scene = replicate(&base, n);
+        for &(w, h) in &sizes {
+            ctx.check_size("--sizes ", w, h)?;
+            for &method in &args.sss {
+                for &tm in &args.transmittance {
+                    let method: SssMethod = method.into();
+                    let tm: TransmittanceMethod = tm.into();
+                    bar.set_message(format!("{n} x {w}x{h} {} {tm:?}", method.name()));
+                    let mut opts = options(&scene, Some(w), Some(h), None)?;
+                    opts.sss = subsurface_render::passes::sss::SssConfig::for_scene(&scene);
+                    opts.sss.method = method;
+                    opts.sss.samples = args.samples;
+                    opts.transmittance.method = tm;
+                    opts.baseline_copy = true;
+                    let mut renderer = Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
+                    let mut samples: Vec<Vec<PassTiming>> = Vec::new();
+                    for i in 0..args.warmup + args.frames {
+                        let t = renderer.render_timed()?;
+                        if i >= args.warmup {
+                            samples.push(t);
+                        }
+                        bar.inc(1);
+                    }
+                    runs.push(summarise(samples, n, w, h, method, tm));
                 }
-                bar.inc(1);
             }
-            let names: Vec<String> = samples.iter().flatten().fold(Vec::new(), |mut acc, t| {
-                if !acc.contains(&t.name) {
-                    acc.push(t.name.clone());
-                }
-                acc
-            });
-            let per_pass = |name: &str| {
-                median(
-                    samples
-                        .iter()
-                        .map(|f| f.iter().filter(|t| t.name == name).map(|t| t.ms).sum())
-                        .collect(),
-                )
-            };
-            let copy_ms = per_pass("copy");
-            let passes: Vec<PassTiming> = names
-                .iter()
-                .filter(|n| n.as_str() != "copy")
-                .map(|n| PassTiming {
-                    name: n.clone(),
-                    ms: per_pass(n),
-                })
-                .collect();
-            let frame_ms = median(
-                samples
-                    .iter()
-                    .map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum())
-                    .collect(),
-            );
-            let sss_ms = passes.iter().find(|p| p.name == "sss").map(|p| p.ms);
-            runs.push(Run {
-                characters: 1,
-                width: w,
-                height: h,
-                sss: method.name(),
-                frame_ms,
-                passes,
-                copy_ms,
-                sss_over_copy: sss_ms.filter(|_| copy_ms > 0.0).map(|s| s / copy_ms),
-            });
         }
     }
     bar.finish_and_clear();
-    let report = Report {
-        adapter: ctx.adapter_name(),
-        frames: args.frames,
-        runs,
-    };
+    let report = Report { adapter: ctx.adapter_name(), warmup: args.warmup, frames: args.frames, runs };
+    if let Some(p) = pending_plot {
+        plot(p, &report)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        println!(
-            "{} — median of {} frames after {} warm-up",
-            report.adapter, args.frames, args.warmup
-        );
-        println!(
-            "{:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
-            "size", "sss", "frame ms", "shadow", "lighting", "sss ms", "sss/copy"
-        );
-        for r in &report.runs {
-            let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
-            println!(
-                "{:>10} {:>10} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>10}",
-                format!("{}x{}", r.width, r.height),
-                r.sss,
-                r.frame_ms,
-                p("shadow"),
-                p("lighting"),
-                p("sss"),
-                r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
-            );
-        }
+        print_table(&report);
     }
     Ok(())
+}
+
+fn summarise(samples: Vec<Vec<PassTiming>>, n: u32, w: u32, h: u32, method: SssMethod, tm: TransmittanceMethod) -> Run {
+    let mut names: Vec<String> = Vec::new();
+    for t in samples.iter().flatten() {
+        if !names.contains(&t.name) {
+            names.push(t.name.clone());
+        }
+    }
+    let per_pass =
+        |name: &str| median(samples.iter().map(|f| f.iter().filter(|t| t.name == name).map(|t| t.ms).sum()).collect());
+    let copy_ms = per_pass("copy");
+    let passes: Vec<PassTiming> =
+        names.iter().filter(|n| n.as_str() != "copy").map(|n| PassTiming { name: n.clone(), ms: per_pass(n) }).collect();
+    let frame_ms = median(samples.iter().map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum()).collect());
+    let sss_ms: f64 = passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).sum();
+    Run {
+        characters: n,
+        width: w,
+        height: h,
+        sss: method.name(),
+        transmittance: format!("{tm:?}").to_lowercase(),
+        frame_ms,
+        passes,
+        copy_ms,
+        sss_over_copy: (sss_ms > 0.0 && copy_ms > 0.0).then(|| sss_ms / copy_ms),
+    }
+}
+
+fn print_table(report: &Report) {
+    println!("{} — median of {} frames after {} warm-up", report.adapter, report.frames, report.warmup);
+    println!(
+        "{:>5} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}",
+        "chars", "size", "sss", "transm.", "frame ms", "shadow", "lighting", "sss ms", "sss/copy"
+    );
+    for r in &report.runs {
+        let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
+        let sss: f64 = r.passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).fold(0.0, |a, b| a + b);
+        println!(
+            "{:>5} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}",
+            r.characters,
+            format!("{}x{}", r.width, r.height),
+            r.sss,
+            r.transmittance,
+            r.frame_ms,
+            p("shadow"),
+            p("lighting"),
+            sss,
+            r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
+        );
+    }
+}
+
+const PLOT_SIZE: (u32, u32) = (900, 560);
+
+/// Frame time (solid) and SSS time (dashed) against the number of characters, per method.
+fn plot(pending: PendingFile, report: &Report) -> Result<()> {
+    crate::cmd_profile::register_font();
+    let mut buf = vec![0u8; (PLOT_SIZE.0 * PLOT_SIZE.1 * 3) as usize];
+    draw(&mut buf, report).map_err(|e| anyhow::anyhow!("--plot: {e}"))?;
+    let img = image::RgbImage::from_raw(PLOT_SIZE.0, PLOT_SIZE.1, buf).context("plot buffer")?;
+    pending.write_png(&image::DynamicImage::ImageRgb8(img).to_rgba8())
+}
+
+fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error>> {
+    let root = BitMapBackend::with_buffer(buf, PLOT_SIZE).into_drawing_area();
+    root.fill(&WHITE)?;
+    let max_n = report.runs.iter().map(|r| r.characters).max().unwrap_or(1).max(2) as f64;
+    let max_ms = report.runs.iter().map(|r| r.frame_ms).fold(0.0, f64::max).max(1e-3) * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("GPU time vs characters — {}", report.adapter), ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..max_n * 1.05, 0.0..max_ms)?;
+    chart.configure_mesh().x_desc("characters").y_desc("ms (solid: frame, dashed: SSS)").draw()?;
+    let mut keys: Vec<(&str, String, u32, u32)> = Vec::new();
+    for r in &report.runs {
+        let k = (r.sss, r.transmittance.clone(), r.width, r.height);
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (i, (sss, tm, w, h)) in keys.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        let pts: Vec<&Run> =
+            report.runs.iter().filter(|r| r.sss == *sss && &r.transmittance == tm && r.width == *w && r.height == *h).collect();
+        let sss_ms = |r: &Run| r.passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).sum::<f64>();
+        chart
+            .draw_series(LineSeries::new(pts.iter().map(|r| (r.characters as f64, r.frame_ms)), colour.stroke_width(2)))?
+            .label(format!("{sss} {tm} {w}x{h}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        chart.draw_series(DashedLineSeries::new(
+            pts.iter().map(|r| (r.characters as f64, sss_ms(r))),
+            6,
+            4,
+            colour.stroke_width(2),
+        ))?;
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grid keeps the characters' footprint: n copies, each 1/columns the size, inside
+    /// the original bounds (plus rounding).
+    #[test]
+    fn replicated_characters_cover_the_same_area() {
+        let scene = Scene::default_scene();
+        let (lo, hi) = scene.bounds();
+        for n in [1, 2, 4, 9, 16] {
+            let grid = replicate(&scene, n);
+            assert_eq!(grid.objects.len(), scene.objects.len() * n as usize);
+            let (glo, ghi) = grid.bounds();
+            let slack = (hi - lo) * 0.05;
+            assert!(glo.cmpge(lo - slack).all() && ghi.cmple(hi + slack).all(), "n={n}: {glo}..{ghi} vs {lo}..{hi}");
+            let cols = (n as f32).sqrt().ceil();
+            let (clo, chi) = grid.objects[0].world_bounds();
+            let (olo, ohi) = scene.objects[0].world_bounds();
+            assert!((((chi - clo).length() / (ohi - olo).length()) - 1.0 / cols).abs() < 1e-3, "n={n}: copy not scaled by 1/{cols}");
+        }
+    }
 }

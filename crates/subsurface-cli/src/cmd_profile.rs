@@ -342,7 +342,7 @@ fn write_plot(path: &Path, m: &Material, fit: &GaussianFit) -> Result<()> {
     Ok(())
 }
 
-fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // Only fails for a malformed font, which the bundled file is not.

@@ -32,6 +32,10 @@ pub struct RenderArgs {
     /// Exposure in EV (stops) added to the scene's exposure.
     #[arg(long, value_name = "EV", allow_negative_numbers = true)]
     pub exposure: Option<f32>,
+    /// Render this many copies of the scene's objects in a grid covering about the same
+    /// screen area (the scalability scenes of `bench --characters`).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub characters: u32,
     /// What to write: the final image or an intermediate buffer.
     #[arg(long, value_enum, default_value = "final")]
     pub view: ViewArg,
@@ -46,12 +50,14 @@ pub struct RenderArgs {
 pub struct TransmittanceArgs {
     /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
     /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
-    /// term of the screen/texture-space report, off = none.
-    #[arg(long, value_enum, default_value = "paper")]
-    pub transmittance: TransmittanceArg,
-    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness.
-    #[arg(long, default_value_t = 3, value_name = "N")]
-    pub thickness_filter: u32,
+    /// term of the screen/texture-space report, off = none [default: the scene's
+    /// render.transmittance, paper].
+    #[arg(long, value_enum)]
+    pub transmittance: Option<TransmittanceArg>,
+    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness
+    /// [default: the scene's render.thickness_filter, 3].
+    #[arg(long, value_name = "N")]
+    pub thickness_filter: Option<u32>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// (default: the scene's render.normal_shrink, 0.005 unless set).
     #[arg(long, value_name = "UNITS")]
@@ -66,19 +72,23 @@ pub enum TransmittanceArg {
     Off,
 }
 
+impl From<TransmittanceArg> for TransmittanceMethod {
+    fn from(v: TransmittanceArg) -> Self {
+        match v {
+            TransmittanceArg::Paper => TransmittanceMethod::Paper,
+            TransmittanceArg::Beer => TransmittanceMethod::Beer,
+            TransmittanceArg::SeedReport => TransmittanceMethod::SeedReport,
+            TransmittanceArg::Off => TransmittanceMethod::Off,
+        }
+    }
+}
+
 impl TransmittanceArgs {
     pub fn config(&self, scene: &Scene) -> Result<TransmittanceConfig> {
         let c = TransmittanceConfig {
-            method: match self.transmittance {
-                TransmittanceArg::Paper => TransmittanceMethod::Paper,
-                TransmittanceArg::Beer => TransmittanceMethod::Beer,
-                TransmittanceArg::SeedReport => TransmittanceMethod::SeedReport,
-                TransmittanceArg::Off => TransmittanceMethod::Off,
-            },
-            normal_shrink: self
-                .normal_shrink
-                .unwrap_or(scene.desc.render.normal_shrink),
-            thickness_filter: self.thickness_filter,
+            method: self.transmittance.map_or(scene.desc.render.transmittance, TransmittanceMethod::from),
+            normal_shrink: self.normal_shrink.unwrap_or(scene.desc.render.normal_shrink),
+            thickness_filter: self.thickness_filter.unwrap_or(scene.desc.render.thickness_filter),
         };
         c.validate()
             .map_err(|e| anyhow::anyhow!("--{}", e.to_string().replace('_', "-")))?;
@@ -92,11 +102,12 @@ pub struct SssArgs {
     /// Screen-space SSS method: gaussian6 = Jimenez et al. 2009 / GPU Pro (five Gaussians, H+V
     /// 7-tap blurs each), separable = Jimenez et al. 2015 (one H and one V pass), hable13 =
     /// Hable et al. 2009 (one 2-D pass of 13 taps), none = no scattering.
-    #[arg(long, value_enum, default_value = "separable")]
-    pub sss: SssArg,
-    /// Separable: number of kernel taps (odd, 3..=63).
-    #[arg(long, default_value_t = 17, value_name = "N")]
-    pub samples: u32,
+    /// [default: the scene's render.sss, separable]
+    #[arg(long, value_enum)]
+    pub sss: Option<SssArg>,
+    /// Separable: number of kernel taps (odd, 3..=63) [default: the scene's render.samples, 17].
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u32>,
     /// Scene units per profile millimetre for every skin object, overriding what each object's
     /// mm_per_unit and sss_width give (e.g. 0.001 for a model in metres at physical size).
     #[arg(long, value_name = "UNITS")]
@@ -161,8 +172,8 @@ impl SssArgs {
             }
         }
         let mut config = SssConfig::for_scene(scene);
-        config.method = self.sss.into();
-        config.samples = self.samples;
+        config.method = self.sss.map_or(scene.desc.render.sss, SssMethod::from);
+        config.samples = self.samples.unwrap_or(scene.desc.render.samples);
         if let Some(s) = self.strength {
             config.strength = s;
         }
@@ -242,7 +253,8 @@ pub fn options(
 pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
     let start = Instant::now();
     let pending = PendingFile::create(&args.out)?;
-    let mut scene = load_scene(args.scene.as_ref(), args.model.as_ref())?;
+    anyhow::ensure!((1..=256).contains(&args.characters), "--characters: must be in 1..=256 (got {})", args.characters);
+    let mut scene = crate::bench::replicate(&load_scene(args.scene.as_ref(), args.model.as_ref())?, args.characters);
     let mut opts = options(&scene, args.width, args.height, args.exposure)?;
     opts.view = args.view.into();
     opts.sss = args.sss.apply(&mut scene)?;

@@ -168,9 +168,9 @@ fn bench_json_has_runs_with_positive_times() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let runs = v["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), 2);
+    assert_eq!(runs.len(), 4);
     for r in runs {
-        assert_eq!(r["characters"], 1);
+        assert!(r["characters"] == 1 || r["characters"] == 2, "{r}");
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
         let passes = r["passes"].as_array().unwrap();
         assert!(

@@ -166,6 +166,14 @@ pub struct RenderDesc {
     /// Transmittance: how far (scene units) a shaded point moves inward along its vertex
     /// normal before the shadow-map lookup (Jimenez et al. 2010 use 0.005).
     pub normal_shrink: f32,
+    /// Screen-space SSS method (`subsurface render --sss` overrides it).
+    pub sss: crate::passes::sss::SssMethod,
+    /// Separable kernel taps, odd, 3..=63.
+    pub samples: u32,
+    /// Transmittance method.
+    pub transmittance: crate::passes::transmittance::TransmittanceMethod,
+    /// Width in texels of the shadow-map area averaged for thickness, odd, 1..=15.
+    pub thickness_filter: u32,
 }
 
 impl Default for RenderDesc {
@@ -177,6 +185,10 @@ impl Default for RenderDesc {
             ambient: [0.02, 0.02, 0.02],
             background: [0.02, 0.02, 0.025],
             normal_shrink: 0.005,
+            sss: crate::passes::sss::SssMethod::Separable,
+            samples: 17,
+            transmittance: crate::passes::transmittance::TransmittanceMethod::Paper,
+            thickness_filter: 3,
         }
     }
 }
@@ -653,6 +665,15 @@ impl SceneDesc {
         c.nonneg3("render.ambient", r.ambient)?;
         c.nonneg3("render.background", r.background)?;
         c.finite("render.normal_shrink", r.normal_shrink)?;
+        if !(3..=63).contains(&r.samples) || r.samples.is_multiple_of(2) {
+            return Err(c.err("render.samples", format!("must be odd and in 3..=63 (got {})", r.samples)));
+        }
+        if !(1..=15).contains(&r.thickness_filter) || r.thickness_filter.is_multiple_of(2) {
+            return Err(c.err(
+                "render.thickness_filter",
+                format!("must be odd and in 1..=15 (got {})", r.thickness_filter),
+            ));
+        }
         if r.normal_shrink < 0.0 {
             return Err(c.err(
                 "render.normal_shrink",
