@@ -50,7 +50,8 @@ pub struct RenderArgs {
 pub struct TransmittanceArgs {
     /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
     /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
-    /// term of the screen/texture-space report, off = none [default: the scene's
+    /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
+    /// irradiance blurred in texture space, same T(s) as paper), off = none [default: the scene's
     /// render.transmittance, paper].
     #[arg(long, value_enum)]
     pub transmittance: Option<TransmittanceArg>,
@@ -69,6 +70,7 @@ pub enum TransmittanceArg {
     Paper,
     Beer,
     SeedReport,
+    Tsm,
     Off,
 }
 
@@ -78,6 +80,7 @@ impl From<TransmittanceArg> for TransmittanceMethod {
             TransmittanceArg::Paper => TransmittanceMethod::Paper,
             TransmittanceArg::Beer => TransmittanceMethod::Beer,
             TransmittanceArg::SeedReport => TransmittanceMethod::SeedReport,
+            TransmittanceArg::Tsm => TransmittanceMethod::Tsm,
             TransmittanceArg::Off => TransmittanceMethod::Off,
         }
     }
@@ -86,9 +89,15 @@ impl From<TransmittanceArg> for TransmittanceMethod {
 impl TransmittanceArgs {
     pub fn config(&self, scene: &Scene) -> Result<TransmittanceConfig> {
         let c = TransmittanceConfig {
-            method: self.transmittance.map_or(scene.desc.render.transmittance, TransmittanceMethod::from),
-            normal_shrink: self.normal_shrink.unwrap_or(scene.desc.render.normal_shrink),
-            thickness_filter: self.thickness_filter.unwrap_or(scene.desc.render.thickness_filter),
+            method: self
+                .transmittance
+                .map_or(scene.desc.render.transmittance, TransmittanceMethod::from),
+            normal_shrink: self
+                .normal_shrink
+                .unwrap_or(scene.desc.render.normal_shrink),
+            thickness_filter: self
+                .thickness_filter
+                .unwrap_or(scene.desc.render.thickness_filter),
         };
         c.validate()
             .map_err(|e| anyhow::anyhow!("--{}", e.to_string().replace('_', "-")))?;
@@ -101,7 +110,8 @@ impl TransmittanceArgs {
 pub struct SssArgs {
     /// Screen-space SSS method: gaussian6 = Jimenez et al. 2009 / GPU Pro (five Gaussians, H+V
     /// 7-tap blurs each), separable = Jimenez et al. 2015 (one H and one V pass), hable13 =
-    /// Hable et al. 2009 (one 2-D pass of 13 taps), none = no scattering.
+    /// Hable et al. 2009 (one 2-D pass of 13 taps), texture = d'Eon et al. 2007 texture-space
+    /// diffusion (per-object UV irradiance maps), none = no scattering.
     /// [default: the scene's render.sss, separable]
     #[arg(long, value_enum)]
     pub sss: Option<SssArg>,
@@ -122,6 +132,9 @@ pub struct SssArgs {
     /// Let the blur cross depth edges (turns off the depth-difference correction).
     #[arg(long)]
     pub no_follow_surface: bool,
+    /// Texture-space SSS: size of each object's irradiance map in texels.
+    #[arg(long, default_value_t = 1024, value_name = "N")]
+    pub texture_size: u32,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,6 +143,7 @@ pub enum SssArg {
     Gaussian6,
     Separable,
     Hable13,
+    Texture,
 }
 
 impl From<SssArg> for SssMethod {
@@ -139,6 +153,7 @@ impl From<SssArg> for SssMethod {
             SssArg::Gaussian6 => SssMethod::Gaussian6,
             SssArg::Separable => SssMethod::Separable,
             SssArg::Hable13 => SssMethod::Hable13,
+            SssArg::Texture => SssMethod::Texture,
         }
     }
 }
@@ -174,6 +189,7 @@ impl SssArgs {
         let mut config = SssConfig::for_scene(scene);
         config.method = self.sss.map_or(scene.desc.render.sss, SssMethod::from);
         config.samples = self.samples.unwrap_or(scene.desc.render.samples);
+        config.texture_size = self.texture_size;
         if let Some(s) = self.strength {
             config.strength = s;
         }
@@ -253,8 +269,15 @@ pub fn options(
 pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
     let start = Instant::now();
     let pending = PendingFile::create(&args.out)?;
-    anyhow::ensure!((1..=256).contains(&args.characters), "--characters: must be in 1..=256 (got {})", args.characters);
-    let mut scene = crate::bench::replicate(&load_scene(args.scene.as_ref(), args.model.as_ref())?, args.characters);
+    anyhow::ensure!(
+        (1..=256).contains(&args.characters),
+        "--characters: must be in 1..=256 (got {})",
+        args.characters
+    );
+    let mut scene = crate::bench::replicate(
+        &load_scene(args.scene.as_ref(), args.model.as_ref())?,
+        args.characters,
+    );
     let mut opts = options(&scene, args.width, args.height, args.exposure)?;
     opts.view = args.view.into();
     opts.sss = args.sss.apply(&mut scene)?;

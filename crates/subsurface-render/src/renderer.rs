@@ -10,8 +10,9 @@ use crate::passes::copy::CopyPass;
 use crate::passes::lighting::{LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssConfig, SssInputs, SssMethod, SssPass};
+use crate::passes::texture_space::{self, TextureSpacePass, TextureSpaceSettings, TsmPass};
 use crate::passes::tonemap::{self, DebugView, ToneMapInputs, ToneMapPass};
-use crate::passes::transmittance::TransmittanceConfig;
+use crate::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
 use crate::readback;
 use crate::scene::Scene;
 use crate::timing::{self, PassTiming};
@@ -98,6 +99,33 @@ pub struct Renderer {
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
     material_names: Vec<String>,
+    /// Group 2 of the lighting pass (texture-space maps per object).
+    maps_layout: wgpu::BindGroupLayout,
+    texture_space: TextureSpacePass,
+    /// What forces the texture-space maps to be rebuilt: settings and which objects are skin.
+    texture_signature: (TextureSpaceSettings, Vec<bool>),
+    /// Translucent shadow maps, with `TransmittanceMethod::Tsm`.
+    tsm: Option<TsmPass>,
+    tsm_dummy: wgpu::TextureView,
+}
+
+fn texture_settings(options: &RenderOptions) -> TextureSpaceSettings {
+    TextureSpaceSettings {
+        diffuse: options.sss.method == SssMethod::Texture,
+        tsm: options.transmittance.method == TransmittanceMethod::Tsm,
+        size: options.sss.texture_size,
+        padding: options.sss.texture_padding,
+        albedo_pre: options.sss.texture_albedo_pre,
+    }
+}
+
+fn skin_flags(scene: &Scene) -> Vec<bool> {
+    scene
+        .objects
+        .iter()
+        .filter(|o| !o.mesh.indices.is_empty())
+        .map(|o| o.material.sss_strength > 0.0)
+        .collect()
 }
 
 fn check_options(ctx: &GpuContext, options: &RenderOptions) -> Result<(), RenderError> {
@@ -192,13 +220,22 @@ impl Renderer {
             &kinds,
         )?;
         let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
-        let lighting = LightingPass::new(
+        let maps_layout = texture_space::maps_layout(device);
+        let settings = texture_settings(&options);
+        let tsm = settings
+            .tsm
+            .then(|| TsmPass::new(ctx, &object_layout, &lights.layers, lights.atlas_size));
+        let tsm_dummy = texture_space::dummy_tsm_view(device);
+        let lighting = LightingPass::with_maps(
             ctx,
             &object_layout,
+            &maps_layout,
             &camera,
             &lights.uniform,
             &shadow.atlas_view,
+            tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
+        let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
         let targets = LightingTargets::new(ctx, options.width, options.height);
         let tonemap = ToneMapPass::new(device, tonemap::OUTPUT_FORMAT);
         let views = target_views(&targets);
@@ -242,6 +279,11 @@ impl Renderer {
                 .iter()
                 .map(|o| o.material.profile.clone())
                 .collect(),
+            maps_layout,
+            texture_space,
+            texture_signature: (settings, skin_flags(scene)),
+            tsm,
+            tsm_dummy,
             options,
         })
     }
@@ -259,7 +301,8 @@ impl Renderer {
             .iter()
             .map(|o| o.material.profile.clone())
             .collect();
-        if names != self.material_names {
+        let reuploaded = names != self.material_names;
+        if reuploaded {
             // A different profile needs a different T(s) LUT in the object's bind group.
             self.objects = gpu_scene::upload_objects(&self.ctx, scene, &self.object_layout)?;
             self.material_names = names;
@@ -282,7 +325,10 @@ impl Renderer {
         let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
-        if signature != self.shadow_signature || kinds.len() != self.light_kinds.len() {
+        let settings = texture_settings(options);
+        let rebuild_shadows =
+            signature != self.shadow_signature || kinds.len() != self.light_kinds.len();
+        if rebuild_shadows {
             self.shadow = ShadowPass::new(
                 &self.ctx,
                 &self.object_layout,
@@ -294,16 +340,36 @@ impl Renderer {
         } else {
             self.shadow.update_layers(&queue, &lights.layers, &kinds);
         }
+        match (&mut self.tsm, settings.tsm) {
+            (Some(tsm), true) if !rebuild_shadows => tsm.update_layers(&queue, &lights.layers),
+            (_, true) => {
+                self.tsm = Some(TsmPass::new(
+                    &self.ctx,
+                    &self.object_layout,
+                    &lights.layers,
+                    lights.atlas_size,
+                ));
+            }
+            (_, false) => self.tsm = None,
+        }
         self.light_kinds = kinds;
         let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
-        // The lighting pass binds the shadow atlas, which may be new.
-        self.lighting = LightingPass::new(
+        // The lighting pass binds the shadow atlas and translucent shadow maps, which may be new.
+        self.lighting = LightingPass::with_maps(
             &self.ctx,
             &self.object_layout,
+            &self.maps_layout,
             &camera,
             &lights.uniform,
             &self.shadow.atlas_view,
+            self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
         );
+        let texture_signature = (settings, skin_flags(scene));
+        if reuploaded || texture_signature != self.texture_signature {
+            self.texture_space =
+                TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
+            self.texture_signature = texture_signature;
+        }
         let resized = (options.width, options.height) != (self.options.width, self.options.height);
         if resized {
             self.targets = LightingTargets::new(&self.ctx, options.width, options.height);
@@ -351,14 +417,30 @@ impl Renderer {
         &self.shadow.atlas
     }
 
-    /// Records shadow maps, lighting and SSS: everything up to the HDR targets.
+    /// Texture-space maps of the `index`th object with a mesh: (irradiance, stretch, blurred
+    /// maps); None when the object has none (not skin, or neither `--sss texture` nor TSM).
+    pub fn texture_space_maps(
+        &self,
+        index: usize,
+    ) -> Option<(&wgpu::Texture, &wgpu::Texture, &texture_space::BlurTargets)> {
+        self.texture_space.object_maps(index)
+    }
+
+    /// Records shadow maps, texture-space maps, lighting and SSS: everything up to the HDR
+    /// targets.
     pub fn encode_scene(&self, encoder: &mut wgpu::CommandEncoder) {
         let p = Some(&self.profiler);
         self.shadow.encode(encoder, &self.objects, p);
-        self.lighting.encode(
+        if let Some(tsm) = &self.tsm {
+            tsm.encode(encoder, &self.objects, p);
+        }
+        self.texture_space
+            .encode(encoder, &self.lighting, &self.objects, p);
+        self.lighting.encode_with_maps(
             encoder,
             &self.targets,
             &self.objects,
+            self.texture_space.bind_groups(),
             self.background,
             self.far,
             p,

@@ -666,7 +666,10 @@ impl SceneDesc {
         c.nonneg3("render.background", r.background)?;
         c.finite("render.normal_shrink", r.normal_shrink)?;
         if !(3..=63).contains(&r.samples) || r.samples.is_multiple_of(2) {
-            return Err(c.err("render.samples", format!("must be odd and in 3..=63 (got {})", r.samples)));
+            return Err(c.err(
+                "render.samples",
+                format!("must be odd and in 3..=63 (got {})", r.samples),
+            ));
         }
         if !(1..=15).contains(&r.thickness_filter) || r.thickness_filter.is_multiple_of(2) {
             return Err(c.err(

@@ -30,7 +30,7 @@ pub struct LightUniform {
 pub struct LightsUniform {
     pub count: [u32; 4],
     pub ambient: [f32; 4],
-    /// method (0 off, 1 paper, 2 Beer, 3 seed report), normal shrink, thickness filter, unused
+    /// method (0 off, 1 paper, 2 Beer, 3 seed report, 4 TSM), normal shrink, thickness filter, unused
     pub transmittance: [f32; 4],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
@@ -65,4 +65,32 @@ pub fn mat(m: Mat4) -> [[f32; 4]; 4] {
 
 pub fn v4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
+}
+
+/// Group 2 of the lighting pass (`TextureSpace` in lighting.wgsl), one per object.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct TextureSpaceUniform {
+    /// blurred map is the diffuse (0/1), translucent shadow maps on (0/1), albedo share
+    /// applied before the blur, unused
+    pub params: [f32; 4],
+}
+
+/// One pass of the texture-space blur (`BlurUniform` in texture_space.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct BlurUniform {
+    /// xy = texel axis, z = sigma in profile mm, w unused
+    pub dir: [f32; 4],
+    /// rgb weight of the Gaussian, a unused
+    pub weight: [f32; 4],
+    /// padding radius in texels, largest sigma in texels, unused, unused
+    pub params: [f32; 4],
+}
+
+/// View of one translucent-shadow-map layer (`TsmView` in texture_space.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct TsmViewUniform {
+    pub view_proj: [[f32; 4]; 4],
 }

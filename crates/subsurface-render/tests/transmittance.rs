@@ -13,6 +13,10 @@ const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
 
 /// A scene lit only from behind (-z) by a directional light of irradiance 1, seen from +z.
 fn backlit(object: &str, shadow_map_size: u32) -> Scene {
+    backlit_material(object, shadow_map_size, "skin")
+}
+
+fn backlit_material(object: &str, shadow_map_size: u32, profile: &str) -> Scene {
     scene(&format!(
         r#"
         [camera]
@@ -37,6 +41,7 @@ fn backlit(object: &str, shadow_map_size: u32) -> Scene {
         [objects.material]
         albedo = [1.0, 1.0, 1.0]
         specular = 0.0
+        profile = "{profile}"
         "#
     ))
 }
@@ -249,5 +254,44 @@ fn transmittance_reddens_thin_parts_and_stays_finite() {
     assert!(
         r_on / g_on > 1.1 * (r_off / g_off),
         "transmitted light is not redder"
+    );
+}
+
+/// T(s) comes from the material's own profile: a marble slab (Jensen et al. 2001's measured
+/// coefficients, fitted with Gaussians) transmits nearly white light where skin turns red.
+#[test]
+fn transmitted_colour_follows_the_material_profile() {
+    if context().is_none() {
+        return;
+    }
+    let slab = "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.004 }";
+    let centre = |profile: &str| {
+        let (d, _) = render_diffuse(
+            &backlit_material(slab, 1024, profile),
+            32,
+            32,
+            TransmittanceMethod::Paper,
+        );
+        d[16 * 32 + 16]
+    };
+    let skin = centre("skin");
+    let marble = centre("marble");
+    let rg = |c: [f32; 4]| c[0] / c[1].max(1e-6);
+    eprintln!(
+        "4 mm slab: skin {skin:?} (r/g {:.2}), marble {marble:?} (r/g {:.2})",
+        rg(skin),
+        rg(marble)
+    );
+    assert!(
+        marble[1] > 0.01,
+        "marble transmits almost nothing: {marble:?}"
+    );
+    assert!(
+        rg(skin) > 3.0 * rg(marble),
+        "marble is as red as skin: skin {skin:?}, marble {marble:?}"
+    );
+    assert!(
+        rg(marble) < 2.0,
+        "marble should transmit nearly white light: {marble:?}"
     );
 }

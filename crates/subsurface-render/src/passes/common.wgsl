@@ -23,7 +23,7 @@ struct Light {
 struct Lights {
     count: vec4<u32>,      // x = number of lights
     ambient: vec4<f32>,
-    // x = method (0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*),
+    // x = method (0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*, 4 TSM),
     // y = normal shrink (scene units), z = thickness filter width (texels per axis)
     transmittance: vec4<f32>,
     lights: array<Light, MAX_LIGHTS>,

@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu::GpuContext;
 use crate::gpu_scene::{GpuObject, VERTEX_LAYOUT};
+use crate::passes::texture_space;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
@@ -92,18 +93,47 @@ impl LightingTargets {
 
 pub struct LightingPass {
     pipeline: wgpu::RenderPipeline,
+    /// The same lighting with the mesh laid out by its uv (texture-space diffusion).
+    irradiance_pipeline: wgpu::RenderPipeline,
     frame_bind_group: wgpu::BindGroup,
+    /// Group 2 for objects without texture-space maps.
+    default_maps: wgpu::BindGroup,
     pub camera: wgpu::Buffer,
     pub lights: wgpu::Buffer,
 }
 
 impl LightingPass {
+    /// Without texture-space maps or translucent shadow maps.
     pub fn new(
         ctx: &GpuContext,
         object_layout: &wgpu::BindGroupLayout,
         camera: &CameraUniform,
         lights: &LightsUniform,
         shadow_atlas: &wgpu::TextureView,
+    ) -> Self {
+        let maps_layout = texture_space::maps_layout(&ctx.device);
+        let tsm = texture_space::dummy_tsm_view(&ctx.device);
+        Self::with_maps(
+            ctx,
+            object_layout,
+            &maps_layout,
+            camera,
+            lights,
+            shadow_atlas,
+            &tsm,
+        )
+    }
+
+    /// `maps_layout` is [`texture_space::maps_layout`] (group 2, per object); `tsm_atlas` the
+    /// translucent shadow maps (`Rg32Float` array, same layers as `shadow_atlas`).
+    pub fn with_maps(
+        ctx: &GpuContext,
+        object_layout: &wgpu::BindGroupLayout,
+        maps_layout: &wgpu::BindGroupLayout,
+        camera: &CameraUniform,
+        lights: &LightsUniform,
+        shadow_atlas: &wgpu::TextureView,
+        tsm_atlas: &wgpu::TextureView,
     ) -> Self {
         let device = &ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -127,6 +157,16 @@ impl LightingPass {
                 uniform(1),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -163,11 +203,15 @@ impl LightingPass {
                     binding: 2,
                     resource: wgpu::BindingResource::TextureView(shadow_atlas),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(tsm_atlas),
+                },
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lighting"),
-            bind_group_layouts: &[Some(&frame_layout), Some(object_layout)],
+            bind_group_layouts: &[Some(&frame_layout), Some(object_layout), Some(maps_layout)],
             immediate_size: 0,
         });
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -204,12 +248,58 @@ impl LightingPass {
             multiview_mask: None,
             cache: None,
         });
+        let uv_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("texture_space.wgsl (irradiance)"),
+            source: wgpu::ShaderSource::Wgsl(texture_space::SHADER.into()),
+        });
+        let irradiance_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("texture-space irradiance"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &uv_module,
+                entry_point: Some("vs_irradiance"),
+                compilation_options: Default::default(),
+                buffers: &[Some(VERTEX_LAYOUT)],
+            },
+            // UV islands may be laid out with either winding; no depth (one surface per texel).
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &uv_module,
+                entry_point: Some("fs_irradiance"),
+                compilation_options: Default::default(),
+                targets: &[
+                    Some(texture_space::MAP_FORMAT.into()),
+                    Some(texture_space::STRETCH_FORMAT.into()),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let default_maps = texture_space::default_maps_bind_group(device, maps_layout);
         Self {
             pipeline,
+            irradiance_pipeline,
+            default_maps,
             frame_bind_group,
             camera,
             lights,
         }
+    }
+
+    /// Draws one object into UV space with the texture-space irradiance pipeline (the caller
+    /// begins the pass on the irradiance and stretch maps).
+    pub fn draw_uv_irradiance(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        object: &GpuObject,
+        maps: &wgpu::BindGroup,
+    ) {
+        pass.set_pipeline(&self.irradiance_pipeline);
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
+        pass.set_bind_group(2, maps, &[]);
+        object.draw(pass);
     }
 
     pub fn encode(
@@ -217,6 +307,22 @@ impl LightingPass {
         encoder: &mut wgpu::CommandEncoder,
         targets: &LightingTargets,
         objects: &[GpuObject],
+        background: [f32; 3],
+        far: f32,
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        self.encode_with_maps(encoder, targets, objects, &[], background, far, profiler);
+    }
+
+    /// As `encode`, with each object's texture-space bind group (`maps[i]` for `objects[i]`;
+    /// objects beyond `maps` are lit plainly).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_with_maps(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &LightingTargets,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
         background: [f32; 3],
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
@@ -278,7 +384,8 @@ impl LightingPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            for o in objects {
+            for (i, o) in objects.iter().enumerate() {
+                pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
                 o.draw(&mut pass);
             }
         }

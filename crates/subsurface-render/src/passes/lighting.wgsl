@@ -130,12 +130,28 @@ fn ks_specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32) -> 
     return max(ndotl * rho_s * fr, 0.0);
 }
 
-@fragment
-fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
-    var n_vertex = normalize(in.normal);
-    if (!front) {
-        n_vertex = -n_vertex;
-    }
+// How texture-space diffusion and translucent shadow maps enter this object's shading
+// (group 2, one bind group per object; see texture_space.rs).
+struct TextureSpace {
+    // x = diffuse comes from the blurred UV-space map (0/1), y = translucent shadow maps and
+    // the widest blurred map are available (0/1), z = share of the albedo applied before the
+    // blur (exponent: 0 = all after, 0.5 = d'Eon's pre- and post-scatter, 1 = all before)
+    params: vec4<f32>,
+};
+
+@group(2) @binding(0) var<uniform> texture_space: TextureSpace;
+// Sum of the blurred Gaussians (the scattered irradiance), RGB, in UV space, padded.
+@group(2) @binding(1) var ts_result: texture_2d<f32>;
+// The widest blurred Gaussian alone: the back-side irradiance that translucent shadow maps read.
+@group(2) @binding(2) var ts_widest: texture_2d<f32>;
+@group(2) @binding(3) var ts_sampler: sampler;
+// Translucent shadow maps: the (u, v) of the surface nearest each light, one layer per shadow
+// layer (-1 where nothing was drawn).
+@group(0) @binding(3) var tsm_atlas: texture_2d_array<f32>;
+
+// The shading normal: the interpolated (already oriented) normal bent by the tangent-space
+// normal map.
+fn shading_normal(in: LitVarying, n_vertex: vec3<f32>) -> vec3<f32> {
     var n = n_vertex;
     if (object.flags.y > 0.5) {
         let t = normalize(in.tangent.xyz - n_vertex * dot(n_vertex, in.tangent.xyz));
@@ -143,6 +159,74 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         let tn = textureSample(normal_map, material_sampler, in.uv).xyz * 2.0 - vec3<f32>(1.0);
         n = normalize(t * tn.x + b * tn.y + n_vertex * tn.z);
     }
+    return n;
+}
+
+struct Shading {
+    irradiance: vec3<f32>,  // sum of radiance x shadow x N.L
+    transmitted: vec3<f32>, // T(s) x back irradiance of the 2010-style methods (transmittance.wgsl)
+    tsm: vec3<f32>,         // translucent shadow maps: T(s) x blurred back-side irradiance
+    specular: vec3<f32>,
+};
+
+// Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
+// see the same lights, shadows and transmittance.
+fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool) -> Shading {
+    var s: Shading;
+    s.irradiance = vec3<f32>(0.0);
+    s.transmitted = vec3<f32>(0.0);
+    s.tsm = vec3<f32>(0.0);
+    s.specular = vec3<f32>(0.0);
+    let count = min(lights.count.x, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.lights[i];
+        var l: vec3<f32>;
+        var attenuation = 1.0;
+        if (light.position.w == KIND_DIRECTIONAL) {
+            l = -light.direction.xyz;
+        } else {
+            let to_light = light.position.xyz - world;
+            let dist2 = max(dot(to_light, to_light), 1e-8);
+            l = to_light * inverseSqrt(dist2);
+            attenuation = 1.0 / dist2;
+        }
+        var spot = 1.0;
+        if (light.position.w == KIND_SPOT) {
+            spot = smoothstep(light.spot.x, light.spot.y, dot(-l, light.direction.xyz));
+        }
+        let radiance = light.color.rgb * attenuation * spot;
+        let dark = all(radiance <= vec3<f32>(0.0));
+        if (dark && !with_tsm) {
+            continue;
+        }
+        let shadow = shadow_factor(light, world);
+        if (with_tsm) {
+            // The back-side irradiance already holds every light's radiance; a point this
+            // light sees directly is the entry point itself and receives nothing through it.
+            s.tsm += tsm_transmittance(light, world, n_vertex, shadow);
+        }
+        if (dark) {
+            continue;
+        }
+        s.irradiance += radiance * shadow * max(dot(n, l), 0.0);
+        s.transmitted += radiance * transmittance(light, world, n_vertex, l);
+        s.specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
+    }
+    return s;
+}
+
+// pow(albedo, e) without pow(0, 0).
+fn albedo_power(albedo: vec3<f32>, e: f32) -> vec3<f32> {
+    return pow(max(albedo, vec3<f32>(1e-6)), vec3<f32>(e));
+}
+
+@fragment
+fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
+    var n_vertex = normalize(in.normal);
+    if (!front) {
+        n_vertex = -n_vertex;
+    }
+    let n = shading_normal(in, n_vertex);
     var albedo = object.albedo.rgb;
     if (object.flags.x > 0.5) {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
@@ -153,42 +237,21 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     }
     let m = object.albedo.a;
     let v = normalize(camera.position.xyz - in.world);
-
-    var irradiance = vec3<f32>(0.0);
-    var transmitted = vec3<f32>(0.0);
-    var specular = vec3<f32>(0.0);
-    let count = min(lights.count.x, MAX_LIGHTS);
-    for (var i = 0u; i < count; i++) {
-        let light = lights.lights[i];
-        var l: vec3<f32>;
-        var attenuation = 1.0;
-        if (light.position.w == KIND_DIRECTIONAL) {
-            l = -light.direction.xyz;
-        } else {
-            let to_light = light.position.xyz - in.world;
-            let dist2 = max(dot(to_light, to_light), 1e-8);
-            l = to_light * inverseSqrt(dist2);
-            attenuation = 1.0 / dist2;
-        }
-        var spot = 1.0;
-        if (light.position.w == KIND_SPOT) {
-            spot = smoothstep(light.spot.x, light.spot.y, dot(-l, light.direction.xyz));
-        }
-        let radiance = light.color.rgb * attenuation * spot;
-        if (all(radiance <= vec3<f32>(0.0))) {
-            continue;
-        }
-        let shadow = shadow_factor(light, in.world);
-        irradiance += radiance * shadow * max(dot(n, l), 0.0);
-        transmitted += radiance * transmittance(light, in.world, n_vertex, l);
-        specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
-    }
+    let ts = texture_space.params;
+    let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5);
 
     var out: GBuffer;
-    // Transmitted light joins the reflected diffuse light before the SSS blur, so the two
-    // are blurred together (000_*).
-    out.diffuse = vec4<f32>(albedo * (irradiance + lights.ambient.rgb + transmitted), 1.0);
-    out.specular = vec4<f32>(specular, 1.0);
+    if (ts.x > 0.5) {
+        // Texture-space diffusion: the blurred UV-space map already holds lights, shadows,
+        // ambient and transmittance (and albedo^z); the rest of the albedo is applied here.
+        let blurred = textureSampleLevel(ts_result, ts_sampler, in.uv, 0.0).rgb;
+        out.diffuse = vec4<f32>(albedo_power(albedo, 1.0 - ts.z) * (blurred + s.tsm), 1.0);
+    } else {
+        // Transmitted light joins the reflected diffuse light before the SSS blur, so the two
+        // are blurred together (000_*).
+        out.diffuse = vec4<f32>(albedo * (s.irradiance + lights.ambient.rgb + s.transmitted + s.tsm), 1.0);
+    }
+    out.specular = vec4<f32>(s.specular, 1.0);
     out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
     out.sss = vec2<f32>(object.params.y, object.params.z);
     return out;

@@ -4,6 +4,7 @@ pub mod copy;
 pub mod lighting;
 pub mod shadow;
 pub mod sss;
+pub mod texture_space;
 pub mod tonemap;
 pub mod transmittance;
 
@@ -15,4 +16,5 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("tonemap.wgsl", tonemap::SHADER),
     ("sss.wgsl", sss::SHADER),
     ("copy.wgsl", copy::SHADER),
+    ("texture_space.wgsl", texture_space::SHADER),
 ];

@@ -45,6 +45,9 @@ pub enum SssMethod {
     Separable,
     /// Hable et al. 2009: one 2-D pass with 13 jittered taps.
     Hable13,
+    /// d'Eon et al. 2007: the sum of Gaussians in texture space (`passes::texture_space`); this
+    /// screen-space pass does nothing for it.
+    Texture,
 }
 
 impl SssMethod {
@@ -54,6 +57,7 @@ impl SssMethod {
             SssMethod::Gaussian6 => "gaussian6",
             SssMethod::Separable => "separable",
             SssMethod::Hable13 => "hable13",
+            SssMethod::Texture => "texture",
         }
     }
 }
@@ -76,6 +80,13 @@ pub struct SssConfig {
     pub min_sigma_px: f32,
     /// Six-Gaussian: which of the five blurred Gaussians (narrowest excluded) are on.
     pub gaussians_enabled: [bool; 5],
+    /// Texture space: size of each object's UV-space maps in texels per side.
+    pub texture_size: u32,
+    /// Texture space: padding of the UV islands in texels (0..=16).
+    pub texture_padding: u32,
+    /// Texture space: exponent of the albedo applied before the blur (the rest after it):
+    /// 0 = post-scatter, 0.5 = pre- and post-scatter (d'Eon), 1 = pre-scatter.
+    pub texture_albedo_pre: f32,
 }
 
 impl Default for SssConfig {
@@ -89,6 +100,9 @@ impl Default for SssConfig {
             edge_mm: 3.0,
             min_sigma_px: 0.25,
             gaussians_enabled: [true; 5],
+            texture_size: 1024,
+            texture_padding: 4,
+            texture_albedo_pre: 0.5,
         }
     }
 }
@@ -137,6 +151,24 @@ impl SssConfig {
             return Err(RenderError::invalid(
                 "min_sigma_px",
                 format!("must be finite and >= 0 (got {})", self.min_sigma_px),
+            ));
+        }
+        if !(16..=16384).contains(&self.texture_size) {
+            return Err(RenderError::invalid(
+                "sss.texture_size",
+                format!("must be in 16..=16384 (got {})", self.texture_size),
+            ));
+        }
+        if self.texture_padding > 16 {
+            return Err(RenderError::invalid(
+                "sss.texture_padding",
+                format!("must be in 0..=16 (got {})", self.texture_padding),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.texture_albedo_pre) {
+            return Err(RenderError::invalid(
+                "sss.texture_albedo_pre",
+                format!("must be in 0..=1 (got {})", self.texture_albedo_pre),
             ));
         }
         Ok(())
@@ -401,14 +433,14 @@ impl SssPass {
                     };
                 }
             }
-            SssMethod::None => {}
+            SssMethod::None | SssMethod::Texture => {}
         }
         u
     }
 
     fn make_uniforms(&self, device: &wgpu::Device) -> Result<Vec<wgpu::Buffer>, RenderError> {
         let count = match self.config.method {
-            SssMethod::None => 0,
+            SssMethod::None | SssMethod::Texture => 0,
             SssMethod::Separable => 2,
             SssMethod::Hable13 => 1,
             SssMethod::Gaussian6 => 1 + 2 * self.gaussian_steps().len(),
@@ -484,7 +516,7 @@ impl SssPass {
         let mut steps = Vec::new();
         let mut copy = None;
         match self.config.method {
-            SssMethod::None => {}
+            SssMethod::None | SssMethod::Texture => {}
             SssMethod::Separable => {
                 let tmp = make_target("sss tmp");
                 let tmp_view = view(&tmp);

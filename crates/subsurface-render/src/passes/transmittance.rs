@@ -23,6 +23,10 @@ pub enum TransmittanceMethod {
     Beer,
     /// The ad-hoc s^-0.6 falloff of the screen/texture-space report (001_*), grey.
     SeedReport,
+    /// Translucent shadow maps (d'Eon et al. 2007): the shadow maps also store the (u, v) of
+    /// the surface nearest the light, whose irradiance, blurred in texture space, is
+    /// attenuated by the same T(s) as `Paper` (see `passes::texture_space`).
+    Tsm,
 }
 
 impl TransmittanceMethod {
@@ -32,6 +36,7 @@ impl TransmittanceMethod {
             TransmittanceMethod::Paper => 1.0,
             TransmittanceMethod::Beer => 2.0,
             TransmittanceMethod::SeedReport => 3.0,
+            TransmittanceMethod::Tsm => 4.0,
         }
     }
 }

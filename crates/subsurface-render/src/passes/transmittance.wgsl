@@ -24,13 +24,24 @@ fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> f32 {
     return select(-1.0, sum / max(n, 1.0), n > 0.0);
 }
 
+// T(s) of the object's profile from its LUT, 0 beyond the LUT's range.
+fn profile_transmittance(s_mm: f32) -> vec3<f32> {
+    let range = object.transmit.a;
+    let res = f32(textureDimensions(transmittance_lut).x);
+    if (s_mm > range) {
+        return vec3<f32>(0.0);
+    }
+    let u = (s_mm / range * (res - 1.0) + 0.5) / res;
+    return textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, 0.5), 0.0).rgb;
+}
+
 // Light transmitted through thin parts (Jimenez et al. 2010): thickness from the standard
 // linear-depth shadow map, T(s) of the material's profile, back irradiance from the vertex
 // normal. Returns T(s) * E, to be multiplied by the light's radiance and the albedo.
 fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     let method = u32(lights.transmittance.x);
     // Only lights with a shadow map know the thickness: the others add nothing (no glow).
-    if (method == 0u || light.direction.w < 0.0 || object.params.w <= 0.0) {
+    if (method == 0u || method > 3u || light.direction.w < 0.0 || object.params.w <= 0.0) {
         return vec3<f32>(0.0);
     }
     // Shrink along the vertex normal so points at the silhouette project inside the object
@@ -51,12 +62,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
     var t = vec3<f32>(0.0);
     switch method {
         case 1u: {
-            let range = object.transmit.a;
-            let res = f32(textureDimensions(transmittance_lut).x);
-            if (s_mm <= range) {
-                let u = (s_mm / range * (res - 1.0) + 0.5) / res;
-                t = textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, 0.5), 0.0).rgb;
-            }
+            t = profile_transmittance(s_mm);
         }
         case 2u: {
             // Green's Beer-Lambert attenuation exp(-sigma_t s): one layer, no colour shift
@@ -74,4 +80,39 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
     // the 0.3 lets light wrap around thin edges (000_*, Figure 7).
     let e = max(0.3 + dot(-n_vertex, l), 0.0);
     return t * e;
+}
+
+// Translucent shadow maps (d'Eon et al.; method 4): the thickness s comes from the
+// linear-distance shadow map exactly as above, and the translucent shadow map gives the (u, v)
+// of the entry point on the side facing the light. The light leaving here is the irradiance
+// there, already blurred in texture space (the widest Gaussian), attenuated by the same T(s)
+// as the 2010 method: M = T(s) E_widest(u_in, v_in). `lit` is this light's shadow factor at
+// the shaded point: a point the light sees is its own entry point, so it gets (1 - lit), and
+// the term fades in between 0.25 and 1 mm of thickness for the same reason.
+fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) -> vec3<f32> {
+    if (light.direction.w < 0.0 || object.params.w <= 0.0 || lit >= 1.0) {
+        return vec3<f32>(0.0);
+    }
+    let shrunk = p - n_vertex * lights.transmittance.y;
+    let sc = shadow_coord(light, shrunk);
+    if (!sc.inside) {
+        return vec3<f32>(0.0);
+    }
+    let d_in = shadow_distance(light, sc, i32(lights.transmittance.z));
+    if (d_in < 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
+    let s_mm = s_units / (object.params.z * object.params.w);
+    let size = light.spot.z / light.spot.w;
+    let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
+    let uv_in = textureLoad(tsm_atlas, texel, sc.layer, 0).xy;
+    if (uv_in.x < 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let e = textureSampleLevel(ts_widest, ts_sampler, uv_in, 0.0).rgb;
+    // Within a fraction of a millimetre of the surface the light sees, the entry point is the
+    // shaded point itself (shadow-map acne would otherwise add its own irradiance again).
+    let own = 1.0 - smoothstep(0.25, 1.0, s_mm);
+    return profile_transmittance(s_mm) * e * (1.0 - lit) * (1.0 - own);
 }
