@@ -36,7 +36,12 @@ pub struct BenchArgs {
     #[arg(long, default_value = "1", value_delimiter = ',')]
     pub characters: Vec<u32>,
     /// SSS methods to measure, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "none,separable,gaussian6,hable13")]
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "none,separable,gaussian6,hable13"
+    )]
     pub sss: Vec<SssArg>,
     /// Transmittance methods to measure, comma-separated (e.g. paper,off for the cost of
     /// transmittance side by side).
@@ -60,7 +65,9 @@ pub struct BenchArgs {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
     let w: u32 = w.trim().parse().map_err(|e| format!("width {w:?}: {e}"))?;
     let h: u32 = h.trim().parse().map_err(|e| format!("height {h:?}: {e}"))?;
     if w == 0 || h == 0 {
@@ -99,7 +106,11 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 /// `n` copies of the scene's objects on a grid of ceil(sqrt(n)) columns, each scaled by
@@ -123,7 +134,9 @@ pub fn replicate(scene: &Scene, n: u32) -> Scene {
             0.5 - (r as f32 + 0.5) / rows.max(cols) as f32,
             0.0,
         ) * Vec3::new(size.x, size.y, 0.0);
-        let m = Mat4::from_translation(centre + cell) * Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-centre);
+        let m = Mat4::from_translation(centre + cell)
+            * Mat4::from_scale(Vec3::splat(s))
+            * Mat4::from_translation(-centre);
         for o in &scene.objects {
             let mut copy = o.clone();
             copy.transform = m * o.transform;
@@ -139,22 +152,42 @@ fn is_sss_pass(name: &str) -> bool {
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
-    anyhow::ensure!(args.frames >= 1, "--frames: must be at least 1 (got {})", args.frames);
+    anyhow::ensure!(
+        args.frames >= 1,
+        "--frames: must be at least 1 (got {})",
+        args.frames
+    );
     for &c in &args.characters {
-        anyhow::ensure!((1..=256).contains(&c), "--characters: each must be in 1..=256 (got {c})");
+        anyhow::ensure!(
+            (1..=256).contains(&c),
+            "--characters: each must be in 1..=256 (got {c})"
+        );
     }
     let sizes = match (args.width, args.height) {
-        (Some(w), Some(h)) => vec![parse_size(&format!("{w}x{h}")).map_err(|e| anyhow::anyhow!("--width/--height: {e}"))?],
+        (Some(w), Some(h)) => vec![
+            parse_size(&format!("{w}x{h}"))
+                .map_err(|e| anyhow::anyhow!("--width/--height: {e}"))?,
+        ],
         _ => args.sizes.clone(),
     };
     let base = load_scene(args.scene.as_ref(), args.model.as_ref())?;
     let ctx = GpuContext::new_headless()?;
-    anyhow::ensure!(ctx.has_timestamps(), "{}: the adapter has no timestamp queries", ctx.adapter_name());
-    let pending_plot = args.plot.as_ref().map(|p| PendingFile::create(p)).transpose()?;
-    let configs = sizes.len() * args.characters.len() * args.sss.len() * args.transmittance.len();
-    let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64).with_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}").expect("static template"),
+    anyhow::ensure!(
+        ctx.has_timestamps(),
+        "{}: the adapter has no timestamp queries",
+        ctx.adapter_name()
     );
+    let pending_plot = args
+        .plot
+        .as_ref()
+        .map(|p| PendingFile::create(p))
+        .transpose()?;
+    let configs = sizes.len() * args.characters.len() * args.sss.len() * args.transmittance.len();
+    let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
+        .with_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
+                .expect("static template"),
+        );
     let mut runs = Vec::new();
     for &n in &args.characters {
         let scene = replicate(&base, n);
@@ -171,7 +204,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     opts.sss.samples = args.samples;
                     opts.transmittance.method = tm;
                     opts.baseline_copy = true;
-                    let mut renderer = Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
+                    let mut renderer =
+                        Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
                     let mut samples: Vec<Vec<PassTiming>> = Vec::new();
                     for i in 0..args.warmup + args.frames {
                         let t = renderer.render_timed()?;
@@ -186,7 +220,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     bar.finish_and_clear();
-    let report = Report { adapter: ctx.adapter_name(), warmup: args.warmup, frames: args.frames, runs };
+    let report = Report {
+        adapter: ctx.adapter_name(),
+        warmup: args.warmup,
+        frames: args.frames,
+        runs,
+    };
     if let Some(p) = pending_plot {
         plot(p, &report)?;
     }
@@ -198,20 +237,48 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-fn summarise(samples: Vec<Vec<PassTiming>>, n: u32, w: u32, h: u32, method: SssMethod, tm: TransmittanceMethod) -> Run {
+fn summarise(
+    samples: Vec<Vec<PassTiming>>,
+    n: u32,
+    w: u32,
+    h: u32,
+    method: SssMethod,
+    tm: TransmittanceMethod,
+) -> Run {
     let mut names: Vec<String> = Vec::new();
     for t in samples.iter().flatten() {
         if !names.contains(&t.name) {
             names.push(t.name.clone());
         }
     }
-    let per_pass =
-        |name: &str| median(samples.iter().map(|f| f.iter().filter(|t| t.name == name).map(|t| t.ms).sum()).collect());
+    let per_pass = |name: &str| {
+        median(
+            samples
+                .iter()
+                .map(|f| f.iter().filter(|t| t.name == name).map(|t| t.ms).sum())
+                .collect(),
+        )
+    };
     let copy_ms = per_pass("copy");
-    let passes: Vec<PassTiming> =
-        names.iter().filter(|n| n.as_str() != "copy").map(|n| PassTiming { name: n.clone(), ms: per_pass(n) }).collect();
-    let frame_ms = median(samples.iter().map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum()).collect());
-    let sss_ms: f64 = passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).sum();
+    let passes: Vec<PassTiming> = names
+        .iter()
+        .filter(|n| n.as_str() != "copy")
+        .map(|n| PassTiming {
+            name: n.clone(),
+            ms: per_pass(n),
+        })
+        .collect();
+    let frame_ms = median(
+        samples
+            .iter()
+            .map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum())
+            .collect(),
+    );
+    let sss_ms: f64 = passes
+        .iter()
+        .filter(|p| is_sss_pass(&p.name))
+        .map(|p| p.ms)
+        .sum();
     Run {
         characters: n,
         width: w,
@@ -226,14 +293,22 @@ fn summarise(samples: Vec<Vec<PassTiming>>, n: u32, w: u32, h: u32, method: SssM
 }
 
 fn print_table(report: &Report) {
-    println!("{} — median of {} frames after {} warm-up", report.adapter, report.frames, report.warmup);
+    println!(
+        "{} — median of {} frames after {} warm-up",
+        report.adapter, report.frames, report.warmup
+    );
     println!(
         "{:>5} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}",
         "chars", "size", "sss", "transm.", "frame ms", "shadow", "lighting", "sss ms", "sss/copy"
     );
     for r in &report.runs {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
-        let sss: f64 = r.passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).fold(0.0, |a, b| a + b);
+        let sss: f64 = r
+            .passes
+            .iter()
+            .filter(|p| is_sss_pass(&p.name))
+            .map(|p| p.ms)
+            .fold(0.0, |a, b| a + b);
         println!(
             "{:>5} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}",
             r.characters,
@@ -263,15 +338,34 @@ fn plot(pending: PendingFile, report: &Report) -> Result<()> {
 fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(buf, PLOT_SIZE).into_drawing_area();
     root.fill(&WHITE)?;
-    let max_n = report.runs.iter().map(|r| r.characters).max().unwrap_or(1).max(2) as f64;
-    let max_ms = report.runs.iter().map(|r| r.frame_ms).fold(0.0, f64::max).max(1e-3) * 1.1;
+    let max_n = report
+        .runs
+        .iter()
+        .map(|r| r.characters)
+        .max()
+        .unwrap_or(1)
+        .max(2) as f64;
+    let max_ms = report
+        .runs
+        .iter()
+        .map(|r| r.frame_ms)
+        .fold(0.0, f64::max)
+        .max(1e-3)
+        * 1.1;
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("GPU time vs characters — {}", report.adapter), ("sans-serif", 18))
+        .caption(
+            format!("GPU time vs characters — {}", report.adapter),
+            ("sans-serif", 18),
+        )
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(0.0..max_n * 1.05, 0.0..max_ms)?;
-    chart.configure_mesh().x_desc("characters").y_desc("ms (solid: frame, dashed: SSS)").draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("characters")
+        .y_desc("ms (solid: frame, dashed: SSS)")
+        .draw()?;
     let mut keys: Vec<(&str, String, u32, u32)> = Vec::new();
     for r in &report.runs {
         let k = (r.sss, r.transmittance.clone(), r.width, r.height);
@@ -281,13 +375,27 @@ fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error
     }
     for (i, (sss, tm, w, h)) in keys.iter().enumerate() {
         let colour = Palette99::pick(i).to_rgba();
-        let pts: Vec<&Run> =
-            report.runs.iter().filter(|r| r.sss == *sss && &r.transmittance == tm && r.width == *w && r.height == *h).collect();
-        let sss_ms = |r: &Run| r.passes.iter().filter(|p| is_sss_pass(&p.name)).map(|p| p.ms).sum::<f64>();
+        let pts: Vec<&Run> = report
+            .runs
+            .iter()
+            .filter(|r| r.sss == *sss && &r.transmittance == tm && r.width == *w && r.height == *h)
+            .collect();
+        let sss_ms = |r: &Run| {
+            r.passes
+                .iter()
+                .filter(|p| is_sss_pass(&p.name))
+                .map(|p| p.ms)
+                .sum::<f64>()
+        };
         chart
-            .draw_series(LineSeries::new(pts.iter().map(|r| (r.characters as f64, r.frame_ms)), colour.stroke_width(2)))?
+            .draw_series(LineSeries::new(
+                pts.iter().map(|r| (r.characters as f64, r.frame_ms)),
+                colour.stroke_width(2),
+            ))?
             .label(format!("{sss} {tm} {w}x{h}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
         chart.draw_series(DashedLineSeries::new(
             pts.iter().map(|r| (r.characters as f64, sss_ms(r))),
             6,
@@ -295,7 +403,11 @@ fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error
             colour.stroke_width(2),
         ))?;
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
     root.present()?;
     Ok(())
 }
@@ -315,11 +427,17 @@ mod tests {
             assert_eq!(grid.objects.len(), scene.objects.len() * n as usize);
             let (glo, ghi) = grid.bounds();
             let slack = (hi - lo) * 0.05;
-            assert!(glo.cmpge(lo - slack).all() && ghi.cmple(hi + slack).all(), "n={n}: {glo}..{ghi} vs {lo}..{hi}");
+            assert!(
+                glo.cmpge(lo - slack).all() && ghi.cmple(hi + slack).all(),
+                "n={n}: {glo}..{ghi} vs {lo}..{hi}"
+            );
             let cols = (n as f32).sqrt().ceil();
             let (clo, chi) = grid.objects[0].world_bounds();
             let (olo, ohi) = scene.objects[0].world_bounds();
-            assert!((((chi - clo).length() / (ohi - olo).length()) - 1.0 / cols).abs() < 1e-3, "n={n}: copy not scaled by 1/{cols}");
+            assert!(
+                (((chi - clo).length() / (ohi - olo).length()) - 1.0 / cols).abs() < 1e-3,
+                "n={n}: copy not scaled by 1/{cols}"
+            );
         }
     }
 }
