@@ -2,8 +2,11 @@
 
 mod bench;
 mod cmd_profile;
+mod compare;
+mod export_mitsuba;
 mod output;
 mod render;
+mod view;
 
 use std::process::ExitCode;
 
@@ -37,6 +40,13 @@ enum Command {
     Kernel(cmd_profile::KernelArgs),
     /// Show a material's diffusion profile, its sum-of-Gaussians fit and T(s); optionally plot them.
     Profile(cmd_profile::ProfileArgs),
+    /// Write the scene as a Mitsuba 3 scene (XML + PLY meshes) to path-trace a reference.
+    ExportMitsuba(export_mitsuba::ExportArgs),
+    /// Render a scene and report its errors against a path-traced reference EXR.
+    Compare(compare::CompareArgs),
+    /// Interactive viewer: orbit/fly cameras, light controls, every parameter live, split-screen
+    /// comparisons and per-pass GPU timings.
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -56,6 +66,9 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::run(a),
         Command::Kernel(a) => cmd_profile::run_kernel(a),
         Command::Profile(a) => cmd_profile::run_profile(a),
+        Command::ExportMitsuba(a) => export_mitsuba::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -149,9 +149,13 @@ fn bench_json_has_runs_with_positive_times() {
     let out = subsurface(
         &[
             "bench",
-            "--sizes",
-            "64x48",
-            "--methods",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--characters",
+            "1,2",
+            "--sss",
             "none,separable",
             "--warmup",
             "1",
@@ -168,23 +172,15 @@ fn bench_json_has_runs_with_positive_times() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let runs = v["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), 4);
+    assert_eq!(runs.len(), 4, "2 character counts x 2 methods");
     for r in runs {
         assert!(r["characters"] == 1 || r["characters"] == 2, "{r}");
+        assert!(r["width"] == 64 && r["height"] == 48, "{r}");
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
         let passes = r["passes"].as_array().unwrap();
-        assert!(
-            passes
-                .iter()
-                .all(|p| p["name"].is_string() && p["ms"].as_f64().unwrap() >= 0.0)
-        );
+        assert!(passes.iter().all(|p| p["name"].is_string() && p["ms"].as_f64().unwrap() >= 0.0));
     }
     assert_eq!(runs[1]["sss"], "separable");
-    assert!(
-        runs[1]["passes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|p| p["name"] == "sss")
-    );
+    assert_eq!(runs[3]["characters"], 2);
+    assert!(runs[1]["passes"].as_array().unwrap().iter().any(|p| p["name"] == "sss"));
 }

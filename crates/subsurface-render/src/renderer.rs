@@ -340,6 +340,7 @@ impl Renderer {
         } else {
             self.shadow.update_layers(&queue, &lights.layers, &kinds);
         }
+        let had_tsm = self.tsm.is_some();
         match (&mut self.tsm, settings.tsm) {
             (Some(tsm), true) if !rebuild_shadows => tsm.update_layers(&queue, &lights.layers),
             (_, true) => {
@@ -354,16 +355,28 @@ impl Renderer {
         }
         self.light_kinds = kinds;
         let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
-        // The lighting pass binds the shadow atlas and translucent shadow maps, which may be new.
-        self.lighting = LightingPass::with_maps(
-            &self.ctx,
-            &self.object_layout,
-            &self.maps_layout,
-            &camera,
-            &lights.uniform,
-            &self.shadow.atlas_view,
-            self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
-        );
+        // The lighting pass binds the shadow atlas and translucent shadow maps: rebuilt only
+        // when those are new, else a camera or light move is two buffer writes (the viewer
+        // calls this on every mouse drag).
+        let new_maps = rebuild_shadows || had_tsm != settings.tsm || (settings.tsm && !had_tsm);
+        if !new_maps {
+            queue.write_buffer(&self.lighting.camera, 0, bytemuck::bytes_of(&camera));
+            queue.write_buffer(
+                &self.lighting.lights,
+                0,
+                bytemuck::bytes_of(&lights.uniform),
+            );
+        } else {
+            self.lighting = LightingPass::with_maps(
+                &self.ctx,
+                &self.object_layout,
+                &self.maps_layout,
+                &camera,
+                &lights.uniform,
+                &self.shadow.atlas_view,
+                self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
+            );
+        }
         let texture_signature = (settings, skin_flags(scene));
         if reuploaded || texture_signature != self.texture_signature {
             self.texture_space =

@@ -1,0 +1,400 @@
+//! `subsurface export-mitsuba`: the same scene as a Mitsuba 3 scene, to path-trace a reference.
+//!
+//! What is exported, and how our conventions map onto Mitsuba's (docs/fidelity.md):
+//!
+//! - Camera: `perspective` with `fov_axis="y"` and a `lookat` transform; near/far are not needed.
+//! - Lights: our lighting pass writes diffuse radiance = albedo x irradiance (no 1/pi), while a
+//!   physical Lambertian (and a diffusing medium) reflects albedo x irradiance / pi. Every
+//!   emitter is therefore exported pi times stronger, so that a surface of albedo `a` has the
+//!   same radiance in both renderers. Point and spot: `intensity` (radiant intensity, 1/d^2 in
+//!   scene units), spot cone `beam_width` = inner and `cutoff_angle` = outer half-angle
+//!   (Mitsuba falls off linearly in angle, we smoothstep in cosine). Directional: `irradiance`.
+//!   Shadows are always on in a path tracer (`shadow_map_size = 0` cannot be expressed).
+//! - Ambient: a `constant` environment of radiance `render.ambient` (seen directly it is also
+//!   the background; ours uses `render.background`, so canonical scenes set both equal).
+//! - Meshes: one binary PLY per object in world space (object transform applied), with vertex
+//!   normals. Textures are not exported (a homogeneous medium has one albedo): the exporter
+//!   says so on stderr.
+//! - Skin (`sss_strength > 0`): a `homogeneous` medium inside a `roughdielectric` (Beckmann,
+//!   alpha = roughness) boundary of relative index 1.3 with Jensen et al. 2001's measured
+//!   sigma_a and sigma_s' of the material's `profile`. "skin" (d'Eon's Gaussians, which have no
+//!   coefficients) is exported as Jensen's "skin1". sigma_s' is used as sigma_s with an
+//!   isotropic phase function (the similarity relation). A rough, not smooth, dielectric:
+//!   a smooth one can never connect to a point or spot light (a delta light behind a delta
+//!   BSDF), and renders black.
+//! - Other objects: a `diffuse` BSDF with the object's albedo.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::Args;
+use glam::Vec3;
+use subsurface_profile::{JENSEN2001_ETA, JENSEN2001_MATERIALS, MeasuredMaterial};
+use subsurface_render::Scene;
+use subsurface_render::scene::{LightKind, Object};
+
+#[derive(Args, Debug)]
+pub struct ExportArgs {
+    /// Scene file (TOML). Without it, the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Output directory: scene.xml and meshes/*.ply are written there (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Image width in pixels (default: the scene's). Overridable at load time (`width`).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: the scene's). Overridable at load time (`height`).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Default samples per pixel written into the scene (`spp` parameter).
+    #[arg(long, default_value_t = 128)]
+    pub spp: u32,
+    /// Default maximum path depth (`max_depth` parameter). Skin's single-scattering albedo is
+    /// up to 0.96, so light needs a hundred or more scattering events to cross a finger.
+    #[arg(long, default_value_t = 256)]
+    pub max_depth: u32,
+}
+
+/// The measured medium used for a profile preset name, and whether it was substituted.
+pub fn medium_for_profile(profile: &str) -> Result<(MeasuredMaterial, bool)> {
+    let key: String = profile
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric())
+        .map(|c| c.to_ascii_lowercase())
+        .collect();
+    // d'Eon's "skin" is a sum of Gaussians fitted to a three-layer model, not a measured
+    // medium: Jensen's first skin sample is the nearest measured stand-in.
+    let (lookup, substituted) = if key == "skin" {
+        ("skin1", true)
+    } else {
+        (key.as_str(), false)
+    };
+    JENSEN2001_MATERIALS
+        .iter()
+        .find(|m| m.name == lookup)
+        .map(|m| (*m, substituted))
+        .with_context(|| {
+            format!(
+                "profile {profile:?}: no measured coefficients (known: skin, {})",
+                JENSEN2001_MATERIALS.map(|m| m.name).join(", ")
+            )
+        })
+}
+
+/// Medium coefficients in 1/scene-unit. Our objects are `mm_per_unit` mm per mesh unit, scaled
+/// by the transform's `s` into the world, and `sss_width` widens the profile: one scene unit
+/// is `mm_per_unit / (s * sss_width)` "profile millimetres" (the inverse of the renderer's
+/// `world_per_mm`).
+pub fn medium_per_unit(m: &MeasuredMaterial, object: &Object) -> ([f64; 3], [f64; 3]) {
+    let s = f64::from(object.transform.determinant().abs().cbrt());
+    let mm_per_scene_unit =
+        f64::from(object.mm_per_unit) / (s * f64::from(object.material.sss_width));
+    let sigma_s = m.sigma_s_prime.map(|x| x * mm_per_scene_unit);
+    let sigma_a = m.sigma_a.map(|x| x * mm_per_scene_unit);
+    (sigma_a, sigma_s)
+}
+
+fn v3(v: impl Into<Vec3>) -> String {
+    let v = v.into();
+    format!("{:.9}, {:.9}, {:.9}", v.x, v.y, v.z)
+}
+
+fn rgb(c: [f64; 3]) -> String {
+    format!("{:.9}, {:.9}, {:.9}", c[0], c[1], c[2])
+}
+
+/// An up vector for `lookat` that is not parallel to the view direction.
+fn up_for(dir: Vec3, preferred: Vec3) -> Vec3 {
+    if preferred.cross(dir).length_squared() > 1e-6 * dir.length_squared() {
+        preferred
+    } else if Vec3::Y.cross(dir).length_squared() > 1e-6 * dir.length_squared() {
+        Vec3::Y
+    } else {
+        Vec3::X
+    }
+}
+
+/// Binary little-endian PLY: float x y z nx ny nz, triangles as uchar count + uint indices.
+fn ply_bytes(object: &Object) -> Vec<u8> {
+    let mut mesh = object.mesh.clone();
+    // Positions to world; normals by the inverse transpose (and re-normalised by Mitsuba).
+    mesh.transform(object.transform);
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment subsurface export-mitsuba: {}\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\n\
+         element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
+        object.name.replace('\n', " "),
+        mesh.vertices.len(),
+        mesh.indices.len() / 3
+    );
+    let mut b = header.into_bytes();
+    b.reserve(mesh.vertices.len() * 24 + mesh.indices.len() / 3 * 13);
+    for v in &mesh.vertices {
+        for x in v.position.iter().chain(v.normal.iter()) {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    for t in mesh.indices.chunks_exact(3) {
+        b.push(3);
+        for i in t {
+            b.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    b
+}
+
+/// File names of the PLYs: index and a sanitised object name.
+fn ply_name(i: usize, object: &Object) -> String {
+    let clean: String = object
+        .name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(40)
+        .collect();
+    format!("{i:02}-{clean}.ply")
+}
+
+/// The scene XML; `warnings` collects what cannot be expressed.
+pub fn scene_xml(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    max_depth: u32,
+    warnings: &mut Vec<String>,
+) -> Result<String> {
+    let d = &scene.desc;
+    let pi = std::f64::consts::PI;
+    let mut x = String::new();
+    let cam = &d.camera;
+    let (pos, target) = (Vec3::from(cam.position), Vec3::from(cam.target));
+    let up = up_for(target - pos, Vec3::from(cam.up));
+    writeln!(x, "<?xml version=\"1.0\" encoding=\"utf-8\"?>")?;
+    writeln!(
+        x,
+        "<!-- Written by `subsurface export-mitsuba`; conventions in docs/fidelity.md.\n     \
+         Emitters are pi times our intensities: our diffuse radiance is albedo x irradiance. -->"
+    )?;
+    writeln!(x, "<scene version=\"3.0.0\">")?;
+    writeln!(x, "  <default name=\"spp\" value=\"{spp}\"/>")?;
+    writeln!(x, "  <default name=\"width\" value=\"{width}\"/>")?;
+    writeln!(x, "  <default name=\"height\" value=\"{height}\"/>")?;
+    writeln!(x, "  <default name=\"max_depth\" value=\"{max_depth}\"/>")?;
+    writeln!(x, "  <default name=\"seed\" value=\"0\"/>")?;
+    // Russian roulette only after many bounces: it is unbiased either way, but early roulette
+    // on a 0.96-albedo medium adds a lot of variance for little time saved.
+    writeln!(
+        x,
+        "  <integrator type=\"volpath\">\n    <integer name=\"max_depth\" value=\"$max_depth\"/>\n    \
+         <integer name=\"rr_depth\" value=\"64\"/>\n  </integrator>"
+    )?;
+    writeln!(
+        x,
+        "  <sensor type=\"perspective\">\n    <string name=\"fov_axis\" value=\"y\"/>\n    \
+         <float name=\"fov\" value=\"{:.9}\"/>\n    <transform name=\"to_world\">\n      \
+         <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    \
+         <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"$spp\"/>\n      \
+         <integer name=\"seed\" value=\"$seed\"/>\n    </sampler>\n    \
+         <film type=\"hdrfilm\">\n      <integer name=\"width\" value=\"$width\"/>\n      \
+         <integer name=\"height\" value=\"$height\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      \
+         <!-- A box filter: one pixel is one pixel of the rasteriser (no wider reconstruction). -->\n      \
+         <rfilter type=\"box\"/>\n    </film>\n  </sensor>",
+        cam.fov_y_deg,
+        v3(pos),
+        v3(target),
+        v3(up)
+    )?;
+    let amb = d.render.ambient;
+    if amb.iter().any(|&a| a > 0.0) {
+        writeln!(
+            x,
+            "  <emitter type=\"constant\">\n    <rgb name=\"radiance\" value=\"{}\"/>\n  </emitter>",
+            rgb(amb.map(f64::from))
+        )?;
+    }
+    if d.render.background != d.render.ambient {
+        warnings.push(format!(
+            "render.background {:?} differs from render.ambient {:?}: Mitsuba's background is the ambient environment",
+            d.render.background, d.render.ambient
+        ));
+    }
+    for (i, l) in d.lights.iter().enumerate() {
+        let power = l.color.map(|c| f64::from(c) * f64::from(l.intensity) * pi);
+        let (p, t) = (Vec3::from(l.position), Vec3::from(l.target));
+        if l.shadow_map_size == 0 {
+            warnings.push(format!("lights[{i}]: shadow_map_size = 0 (unshadowed) cannot be expressed; Mitsuba shadows it"));
+        }
+        match l.kind {
+            LightKind::Point => writeln!(
+                x,
+                "  <emitter type=\"point\">\n    <point name=\"position\" value=\"{}\"/>\n    \
+                 <rgb name=\"intensity\" value=\"{}\"/>\n  </emitter>",
+                v3(p),
+                rgb(power)
+            )?,
+            LightKind::Spot => writeln!(
+                x,
+                "  <emitter type=\"spot\">\n    <transform name=\"to_world\">\n      \
+                 <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    \
+                 <rgb name=\"intensity\" value=\"{}\"/>\n    \
+                 <float name=\"beam_width\" value=\"{:.6}\"/>\n    \
+                 <float name=\"cutoff_angle\" value=\"{:.6}\"/>\n  </emitter>",
+                v3(p),
+                v3(t),
+                v3(up_for(t - p, Vec3::Y)),
+                rgb(power),
+                l.inner_angle_deg,
+                l.outer_angle_deg
+            )?,
+            LightKind::Directional => writeln!(
+                x,
+                "  <emitter type=\"directional\">\n    <vector name=\"direction\" value=\"{}\"/>\n    \
+                 <rgb name=\"irradiance\" value=\"{}\"/>\n  </emitter>",
+                v3((t - p).normalize()),
+                rgb(power)
+            )?,
+        }
+    }
+    for (i, o) in scene.objects.iter().enumerate() {
+        let m = &o.material;
+        for (k, t) in [
+            ("albedo_texture", o.albedo_texture.is_some()),
+            ("normal_texture", o.normal_texture.is_some()),
+            ("specular_texture", o.specular_texture.is_some()),
+        ] {
+            if t {
+                warnings.push(format!(
+                    "objects[{i}] ({}): {k} is not exported (uniform material)",
+                    o.name
+                ));
+            }
+        }
+        writeln!(
+            x,
+            "  <!-- objects[{i}]: {} -->\n  <shape type=\"ply\">\n    \
+             <string name=\"filename\" value=\"meshes/{}\"/>\n    \
+             <boolean name=\"face_normals\" value=\"false\"/>",
+            o.name.replace("--", "- -"),
+            ply_name(i, o)
+        )?;
+        if m.sss_strength > 0.0 {
+            let (mm, substituted) = medium_for_profile(&m.profile)
+                .with_context(|| format!("objects[{i}].material.profile"))?;
+            if substituted {
+                warnings.push(format!(
+                    "objects[{i}] ({}): profile \"{}\" (d'Eon's Gaussians) exported as Jensen 2001 \"skin1\"",
+                    o.name, m.profile
+                ));
+            }
+            if m.sss_strength < 1.0 {
+                warnings.push(format!(
+                    "objects[{i}] ({}): sss_strength {} exported as a full medium",
+                    o.name, m.sss_strength
+                ));
+            }
+            let (sa, ss) = medium_per_unit(&mm, o);
+            let st: [f64; 3] = std::array::from_fn(|c| sa[c] + ss[c]);
+            let albedo: [f64; 3] = std::array::from_fn(|c| ss[c] / st[c]);
+            // Mitsuba treats an RGB sigma_t like a reflectance (values above 1 are not
+            // representable): store sigma_t / max and the max as `scale`.
+            let scale = st.iter().copied().fold(0.0, f64::max);
+            writeln!(
+                x,
+                "    <!-- {}: sigma_a {:?}, sigma_s' {:?} /mm, eta {}; per scene unit: sigma_a [{}], sigma_s [{}] -->\n    \
+                 <bsdf type=\"roughdielectric\">\n      <string name=\"distribution\" value=\"beckmann\"/>\n      \
+                 <float name=\"alpha\" value=\"{:.6}\"/>\n      <float name=\"int_ior\" value=\"{}\"/>\n      \
+                 <float name=\"ext_ior\" value=\"1.0\"/>\n    </bsdf>\n    \
+                 <medium type=\"homogeneous\" name=\"interior\">\n      \
+                 <rgb name=\"albedo\" value=\"{}\"/>\n      <rgb name=\"sigma_t\" value=\"{}\"/>\n      \
+                 <float name=\"scale\" value=\"{:.9}\"/>\n      <phase type=\"isotropic\"/>\n    </medium>",
+                mm.name,
+                mm.sigma_a,
+                mm.sigma_s_prime,
+                JENSEN2001_ETA,
+                rgb(sa),
+                rgb(ss),
+                m.roughness,
+                JENSEN2001_ETA,
+                rgb(albedo),
+                rgb(st.map(|s| s / scale)),
+                scale
+            )?;
+        } else {
+            writeln!(
+                x,
+                "    <bsdf type=\"diffuse\">\n      <rgb name=\"reflectance\" value=\"{}\"/>\n    </bsdf>",
+                rgb(o.albedo.map(|a| f64::from(a.min(1.0))))
+            )?;
+        }
+        writeln!(x, "  </shape>")?;
+    }
+    writeln!(x, "</scene>")?;
+    Ok(x)
+}
+
+/// Writes `DIR/scene.xml` and `DIR/meshes/*.ply`. Everything is built in memory first and
+/// written through temporary files, so a failure leaves no half-written scene.
+pub fn export(
+    scene: &Scene,
+    out: &Path,
+    width: u32,
+    height: u32,
+    spp: u32,
+    max_depth: u32,
+) -> Result<Vec<String>> {
+    anyhow::ensure!(
+        width > 0 && height > 0,
+        "--width/--height: must be at least 1"
+    );
+    anyhow::ensure!(spp > 0, "--spp: must be at least 1");
+    anyhow::ensure!(max_depth > 0, "--max-depth: must be at least 1");
+    let mut warnings = Vec::new();
+    let xml = scene_xml(scene, width, height, spp, max_depth, &mut warnings)?;
+    let plys: Vec<(String, Vec<u8>)> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| (ply_name(i, o), ply_bytes(o)))
+        .collect();
+    let meshes = out.join("meshes");
+    std::fs::create_dir_all(&meshes)
+        .with_context(|| format!("{}: cannot create", meshes.display()))?;
+    let mut pending = Vec::new();
+    for (name, bytes) in &plys {
+        let mut p = crate::output::PendingFile::create(&meshes.join(name))?;
+        p.write_bytes(bytes)?;
+        pending.push(p);
+    }
+    let mut p = crate::output::PendingFile::create(&out.join("scene.xml"))?;
+    p.write_bytes(xml.as_bytes())?;
+    pending.push(p);
+    for p in pending {
+        p.commit()?;
+    }
+    Ok(warnings)
+}
+
+pub fn run(args: &ExportArgs) -> Result<()> {
+    let scene = crate::render::load_scene(args.scene.as_ref(), None)?;
+    let width = args.width.unwrap_or(scene.desc.render.width);
+    let height = args.height.unwrap_or(scene.desc.render.height);
+    let warnings = export(&scene, &args.out, width, height, args.spp, args.max_depth)?;
+    for w in &warnings {
+        eprintln!("note: {w}");
+    }
+    println!(
+        "{}: {} objects, {} lights, {width}x{height}",
+        args.out.join("scene.xml").display(),
+        scene.objects.len(),
+        scene.desc.lights.len()
+    );
+    Ok(())
+}

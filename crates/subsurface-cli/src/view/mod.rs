@@ -1,0 +1,222 @@
+//! `subsurface view`: the interactive viewer. A winit window shows the renderer's image at
+//! the window's physical size with an egui panel over its left side; every setting is live
+//! (`Renderer::update`, no restart), cameras orbit or fly, lights move, and a split screen
+//! compares two settings.
+//!
+//! Layout: `camera` (orbit/fly math, unit-tested), `state` (all settings <-> scene file and
+//! `RenderOptions`, round-trip tested), `model` (edits, no GPU), `panel` (egui), `app`
+//! (window, surface, device, frame loop).
+
+mod app;
+mod camera;
+mod fonts;
+mod model;
+mod panel;
+mod state;
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use subsurface_render::Scene;
+use subsurface_render::scene::DEFAULT_SCENE_TOML;
+
+use crate::output::PendingFile;
+use crate::render::{SssArg, TransmittanceArg, ViewArg};
+use state::{ViewerState, transmittance_from_arg};
+
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// Scene file (TOML). Without it, the embedded default scene. A `# render-flags:` comment
+    /// in it (as the viewer writes) sets the SSS and transmittance methods.
+    pub scene: Option<PathBuf>,
+    /// Replace the scene's objects by this glTF/GLB model; the camera is re-aimed to frame it.
+    #[arg(long, value_name = "FILE.glb")]
+    pub model: Option<PathBuf>,
+    /// Window inner width in physical pixels (default: the scene's width in logical pixels).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Window inner height in physical pixels (default: the scene's height in logical pixels).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Exposure in EV (stops) added to the scene's exposure.
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+    /// Debug view to start with.
+    #[arg(long, value_enum)]
+    pub view: Option<ViewArg>,
+    /// SSS method to start with (default: the scene's `# render-flags:`, else separable).
+    #[arg(long, value_enum)]
+    pub sss: Option<SssArg>,
+    /// Separable: kernel taps (odd, 3..=63).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u32>,
+    /// Let the blur cross depth edges.
+    #[arg(long)]
+    pub no_follow_surface: bool,
+    /// Transmittance method to start with (default: the scene's, else paper).
+    #[arg(long, value_enum)]
+    pub transmittance: Option<TransmittanceArg>,
+    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for thickness.
+    #[arg(long, value_name = "N")]
+    pub thickness_filter: Option<u32>,
+    /// Transmittance normal shrink in scene units (sets the scene's render.normal_shrink).
+    #[arg(long, value_name = "UNITS")]
+    pub normal_shrink: Option<f32>,
+    /// Start in split screen: the settings above on the left, this SSS method on the right.
+    #[arg(long, value_enum, value_name = "METHOD")]
+    pub compare: Option<SssArg>,
+    /// Present without waiting for vertical sync (frame times then show the GPU's pace).
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Scripted mode: render N frames in the window, then write --screenshot/--save-scene and
+    /// exit (non-zero on any error).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u32>,
+    /// With --frames: PNG of the 3D view (the renderer's image, no panel) after the last
+    /// frame.
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
+    /// With --frames: save the settings as a scene file after the last frame.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_scene: Option<PathBuf>,
+    /// With --frames: destroy the GPU device after this frame, to test recovery.
+    #[arg(long, value_name = "FRAME", hide = true)]
+    pub lose_device_at: Option<u32>,
+}
+
+/// Loads the scene and applies the command line on top of it.
+fn initial_state(args: &ViewArgs) -> Result<(ViewerState, Scene)> {
+    let (mut state, mut scene) = match &args.scene {
+        Some(p) => {
+            let state = ViewerState::load(p)?;
+            let scene = Scene::from_desc(
+                state.desc.clone(),
+                &state.base_dir,
+                &p.display().to_string(),
+            )?;
+            (state, scene)
+        }
+        None => (
+            ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "<default scene>")?,
+            Scene::default_scene(),
+        ),
+    };
+    if let Some(m) = &args.model {
+        scene.replace_model(m)?;
+        state.desc = scene.desc.clone();
+    }
+    let a = &mut state.a;
+    if let Some(s) = args.sss {
+        a.sss = s.into();
+    }
+    if let Some(n) = args.samples {
+        a.samples = n;
+    }
+    if args.no_follow_surface {
+        a.follow_surface = false;
+    }
+    if let Some(t) = args.transmittance {
+        a.transmittance = transmittance_from_arg(t);
+    }
+    if let Some(f) = args.thickness_filter {
+        a.thickness_filter = f;
+    }
+    if let Some(v) = args.view {
+        a.view = v.into();
+    }
+    if let Some(e) = args.exposure {
+        anyhow::ensure!(e.is_finite(), "--exposure: must be finite (got {e})");
+        state.desc.render.exposure_ev += e;
+    }
+    if let Some(n) = args.normal_shrink {
+        anyhow::ensure!(
+            n.is_finite() && n >= 0.0,
+            "--normal-shrink: must be finite and >= 0 (got {n})"
+        );
+        state.desc.render.normal_shrink = n;
+    }
+    if let Some(c) = args.compare {
+        state.compare = true;
+        state.b = state::Side {
+            sss: c.into(),
+            ..state.a.clone()
+        };
+    }
+    for (name, v) in [("--width", args.width), ("--height", args.height)] {
+        if let Some(v) = v {
+            anyhow::ensure!(
+                (1..=16384).contains(&v),
+                "{name}: must be in 1..=16384 (got {v})"
+            );
+        }
+    }
+    // Flag values are checked here, before a window opens, with render's field names.
+    state
+        .options(&state.a)
+        .map_err(|e| anyhow::anyhow!("--{}", e.to_string().replace('_', "-")))?;
+    if state.compare {
+        state
+            .options(&state.b)
+            .map_err(|e| anyhow::anyhow!("--compare: {e}"))?;
+    }
+    Ok((state, scene))
+}
+
+pub fn run(args: &ViewArgs) -> Result<()> {
+    if args.frames.is_none() {
+        for (flag, given) in [
+            ("--screenshot", args.screenshot.is_some()),
+            ("--save-scene", args.save_scene.is_some()),
+            ("--lose-device-at", args.lose_device_at.is_some()),
+        ] {
+            anyhow::ensure!(!given, "{flag}: needs --frames N (scripted mode)");
+        }
+    }
+    if let Some(n) = args.frames {
+        anyhow::ensure!(n >= 1, "--frames: must be at least 1 (got {n})");
+    }
+    // Unwritable outputs fail now, not after the window has rendered.
+    let screenshot = args
+        .screenshot
+        .as_deref()
+        .map(PendingFile::create)
+        .transpose()?;
+    if let Some(p) = &args.save_scene {
+        drop(PendingFile::create(p)?);
+    }
+    let (state, scene) = initial_state(args)?;
+    let script = args.frames.map(|frames| app::Script {
+        frames,
+        screenshot,
+        save_scene: args.save_scene.clone(),
+        lose_device_at: args.lose_device_at,
+    });
+    let size: winit::dpi::Size = match (args.width, args.height) {
+        (None, None) => {
+            winit::dpi::LogicalSize::new(state.desc.render.width, state.desc.render.height).into()
+        }
+        (w, h) => winit::dpi::PhysicalSize::new(
+            w.unwrap_or(state.desc.render.width),
+            h.unwrap_or(state.desc.render.height),
+        )
+        .into(),
+    };
+    let model = model::Model::new(state, scene, args.scene.as_deref());
+    let event_loop = winit::event_loop::EventLoop::new().map_err(|e| {
+        // winit prefixes OS errors with its own source location; users need only the reason.
+        let msg = e.to_string();
+        let reason = msg
+            .rsplit_once(".rs:")
+            .and_then(|(_, r)| r.split_once(": "))
+            .map_or(msg.as_str(), |(_, r)| r);
+        anyhow::anyhow!(
+            "cannot open a window: {reason} (for scripted runs without a display, use xvfb-run)"
+        )
+    })?;
+    let mut app = app::App::new(model, &event_loop, size, !args.no_vsync, script);
+    event_loop
+        .run_app(&mut app)
+        .context("the window's event loop failed")?;
+    app.finish()
+}

@@ -1,0 +1,691 @@
+//! The egui side panel and the 3D view's mouse and keyboard input.
+
+use egui::{Color32, ComboBox, DragValue, PointerButton, RichText, Sense, Slider, Ui};
+use subsurface_render::DebugView;
+use subsurface_render::passes::sss::SssMethod;
+use subsurface_render::passes::transmittance::TransmittanceMethod;
+use subsurface_render::scene::LightKind;
+
+use super::camera::{FlyInput, Mode};
+use super::model::{Level, Model, typed_path};
+use super::state::{Side, sss_methods, transmittance_methods, transmittance_name};
+
+/// What the panel asks of the app that needs the GPU.
+#[derive(Debug)]
+pub enum Action {
+    Screenshot(std::path::PathBuf),
+    /// Diagnostics: destroy the device to exercise the recovery path.
+    LoseDevice,
+}
+
+/// Size of the 3D view in physical pixels and pixels per egui point.
+pub struct Viewport {
+    pub width: u32,
+    pub height: u32,
+    pub pixels_per_point: f32,
+    /// Seconds since the previous frame (fly speed).
+    pub dt: f32,
+}
+
+/// The renderer's debug views. Thickness and irradiance-map views do not exist in the
+/// renderer yet.
+const VIEWS: [(DebugView, &str); 6] = [
+    (DebugView::Final, "final"),
+    (DebugView::Mask, "SSS mask"),
+    (DebugView::Depth, "depth"),
+    (DebugView::DiffuseBeforeSss, "diffuse before SSS"),
+    (DebugView::Diffuse, "diffuse after SSS"),
+    (DebugView::Specular, "specular"),
+];
+const SHADOW_SIZES: [u32; 6] = [256, 512, 1024, 2048, 4096, 8192];
+
+fn view_name(v: DebugView) -> &'static str {
+    VIEWS.iter().find(|(d, _)| *d == v).map_or("?", |(_, n)| n)
+}
+
+/// The whole UI for one frame; returns the GPU actions requested.
+pub fn show(ui: &mut Ui, m: &mut Model, vp: &Viewport) -> Vec<Action> {
+    let mut actions = Vec::new();
+    if ui.input(|i| i.key_pressed(egui::Key::F1)) {
+        m.ui.show_panel = !m.ui.show_panel;
+    }
+    if m.ui.show_panel {
+        egui::Panel::left("settings")
+            .default_size(330.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    panel(ui, m, &mut actions);
+                });
+            });
+    }
+    let rect = ui.available_rect_before_wrap();
+    view_input(ui, rect, m, vp);
+    actions
+}
+
+fn panel(ui: &mut Ui, m: &mut Model, actions: &mut Vec<Action>) {
+    ui.heading("subsurface view");
+    ui.label(
+        RichText::new(format!(
+            "{:.1} ms/frame ({:.0} fps) — F1 hides this panel",
+            m.stats.frame_ms,
+            1000.0 / m.stats.frame_ms.max(1e-3)
+        ))
+        .small(),
+    );
+    if let Some(e) = &m.error {
+        ui.colored_label(Color32::LIGHT_RED, e);
+    }
+    files(ui, m, actions);
+    camera(ui, m);
+    lights(ui, m);
+    sss(ui, m);
+    material(ui, m);
+    transmittance(ui, m);
+    image(ui, m);
+    compare(ui, m);
+    timings(ui, m, actions);
+    ui.separator();
+    for (level, msg) in m.log.iter().rev().take(8) {
+        match level {
+            Level::Info => ui.label(RichText::new(msg).small()),
+            Level::Error => ui.colored_label(Color32::LIGHT_RED, msg),
+        };
+    }
+}
+
+fn path_row(ui: &mut Ui, label: &str, path: &mut String, button: &str) -> bool {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        let edit = ui.add(egui::TextEdit::singleline(path).desired_width(170.0));
+        let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        ui.button(button).clicked() || enter
+    })
+    .inner
+}
+
+fn files(ui: &mut Ui, m: &mut Model, actions: &mut Vec<Action>) {
+    ui.collapsing("Files", |ui| {
+        ui.label(
+            RichText::new(
+                "Drop a .glb/.gltf model or a .toml scene on the window, or type a path.",
+            )
+            .small(),
+        );
+        if path_row(ui, "open", &mut m.ui.open_path, "Open") && !m.ui.open_path.trim().is_empty() {
+            let p = typed_path(&m.ui.open_path);
+            m.open(&p);
+        }
+        if path_row(ui, "scene", &mut m.ui.save_path, "Save") {
+            let p = typed_path(&m.ui.save_path);
+            m.save_scene(&p);
+        }
+        if path_row(ui, "image", &mut m.ui.screenshot_path, "Screenshot") {
+            actions.push(Action::Screenshot(typed_path(&m.ui.screenshot_path)));
+        }
+    });
+}
+
+fn camera(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Camera")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.horizontal(|ui| {
+                let mut mode = m.camera.mode;
+                ui.radio_value(&mut mode, Mode::Orbit, "orbit");
+                ui.radio_value(&mut mode, Mode::Fly, "fly");
+                if mode != m.camera.mode {
+                    m.camera.set_mode(mode);
+                    m.camera_moved();
+                }
+                if ui
+                    .button("Reset")
+                    .on_hover_text("the scene's camera")
+                    .clicked()
+                {
+                    m.reset_camera();
+                }
+            });
+            let help = match m.camera.mode {
+                Mode::Orbit => "drag: rotate, wheel: zoom, middle/right drag: pan",
+                Mode::Fly => "WASD: move, Q/E: down/up, Shift: faster, drag: look",
+            };
+            ui.label(RichText::new(format!("{help}; Shift+drag: move the light")).small());
+            let fov = &mut m.state.desc.camera.fov_y_deg;
+            if ui
+                .add(Slider::new(fov, 5.0..=120.0).text("fov y").suffix("°"))
+                .changed()
+            {
+                m.dirty.update = true;
+            }
+        });
+}
+
+fn lights(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Lights")
+        .default_open(true)
+        .show(ui, |ui| {
+            let n = m.state.desc.lights.len();
+            ui.horizontal(|ui| {
+                ComboBox::from_id_salt("light")
+                    .selected_text(if n == 0 {
+                        "no lights".to_string()
+                    } else {
+                        format!("light {}", m.ui.light)
+                    })
+                    .show_ui(ui, |ui| {
+                        for (i, l) in m.state.desc.lights.iter().enumerate() {
+                            ui.selectable_value(
+                                &mut m.ui.light,
+                                i,
+                                format!("light {i} ({:?})", l.kind).to_lowercase(),
+                            );
+                        }
+                    });
+                if ui.button("Add").clicked() {
+                    m.add_light();
+                }
+                if ui.add_enabled(n > 0, egui::Button::new("Remove")).clicked() {
+                    m.remove_light(m.ui.light);
+                }
+            });
+            let i = m.ui.light;
+            if i >= m.state.desc.lights.len() {
+                return;
+            }
+            let (mut az, mut el, mut dist) = m.light_spherical(i);
+            let mut moved = false;
+            moved |= ui
+                .add(
+                    Slider::new(&mut az, -180.0..=180.0)
+                        .text("azimuth")
+                        .suffix("°"),
+                )
+                .changed();
+            moved |= ui
+                .add(
+                    Slider::new(&mut el, -89.0..=89.0)
+                        .text("elevation")
+                        .suffix("°"),
+                )
+                .changed();
+            let (min_d, max_d) = ((dist * 0.1).max(1e-4), (dist * 4.0).max(1e-3));
+            moved |= ui
+                .add(
+                    Slider::new(&mut dist, min_d..=max_d)
+                        .logarithmic(true)
+                        .text("distance"),
+                )
+                .changed();
+            if moved {
+                m.set_light_spherical(i, az, el, dist);
+            }
+            let before = m.state.desc.lights[i].clone();
+            let l = &mut m.state.desc.lights[i];
+            ui.horizontal(|ui| {
+                ComboBox::from_id_salt("kind")
+                    .selected_text(format!("{:?}", l.kind).to_lowercase())
+                    .show_ui(ui, |ui| {
+                        for k in [LightKind::Point, LightKind::Spot, LightKind::Directional] {
+                            ui.selectable_value(&mut l.kind, k, format!("{k:?}").to_lowercase());
+                        }
+                    });
+                ui.color_edit_button_rgb(&mut l.color);
+                ui.label("colour");
+            });
+            ui.add(
+                Slider::new(&mut l.intensity, 0.0..=(before.intensity * 4.0).max(10.0))
+                    .logarithmic(true)
+                    .text("intensity"),
+            );
+            if l.kind == LightKind::Spot {
+                ui.add(Slider::new(&mut l.outer_angle_deg, 1.0..=89.0).text("outer angle"));
+                let outer = l.outer_angle_deg;
+                l.inner_angle_deg = l.inner_angle_deg.min(outer);
+                ui.add(Slider::new(&mut l.inner_angle_deg, 0.5..=outer).text("inner angle"));
+            }
+            ui.horizontal(|ui| {
+                let mut shadow = l.shadow_map_size > 0;
+                if ui.checkbox(&mut shadow, "shadow").changed() {
+                    l.shadow_map_size = if shadow { 2048 } else { 0 };
+                }
+                if shadow {
+                    ComboBox::from_id_salt("shadow size")
+                        .selected_text(format!("{} px", l.shadow_map_size))
+                        .show_ui(ui, |ui| {
+                            for s in SHADOW_SIZES {
+                                ui.selectable_value(&mut l.shadow_map_size, s, format!("{s} px"));
+                            }
+                        });
+                }
+            });
+            let speed = l.shadow_bias.max(1e-4) * 0.05;
+            ui.add(
+                DragValue::new(&mut l.shadow_bias)
+                    .speed(speed)
+                    .range(0.0..=f32::MAX)
+                    .prefix("shadow bias "),
+            );
+            if l.kind != LightKind::Point && ui.button("Aim at the scene centre").clicked() {
+                m.aim_light_at_centre(i);
+            }
+            if m.state.desc.lights[i] != before {
+                m.dirty.update = true;
+            }
+        });
+}
+
+fn method_combo(ui: &mut Ui, id: &str, method: &mut SssMethod) -> bool {
+    let old = *method;
+    ComboBox::from_id_salt(id)
+        .selected_text(method.name())
+        .show_ui(ui, |ui| {
+            for k in sss_methods() {
+                ui.selectable_value(method, k, k.name());
+            }
+        });
+    *method != old
+}
+
+fn transmittance_combo(ui: &mut Ui, id: &str, t: &mut TransmittanceMethod) -> bool {
+    let old = *t;
+    ComboBox::from_id_salt(id)
+        .selected_text(transmittance_name(*t))
+        .show_ui(ui, |ui| {
+            for k in transmittance_methods() {
+                ui.selectable_value(t, k, transmittance_name(k));
+            }
+        });
+    *t != old
+}
+
+fn view_combo(ui: &mut Ui, id: &str, v: &mut DebugView) -> bool {
+    let old = *v;
+    ComboBox::from_id_salt(id)
+        .selected_text(view_name(*v))
+        .show_ui(ui, |ui| {
+            for (k, name) in VIEWS {
+                ui.selectable_value(v, k, name);
+            }
+        });
+    *v != old
+}
+
+/// An odd count in `lo..=hi` as a slider over the odd values.
+fn odd_slider(ui: &mut Ui, n: &mut u32, lo: u32, hi: u32, text: &str) -> bool {
+    let mut k = n.saturating_sub(1) / 2;
+    let changed = ui
+        .add(
+            Slider::new(&mut k, (lo - 1) / 2..=(hi - 1) / 2)
+                .custom_formatter(|v, _| format!("{}", 2 * v as u32 + 1))
+                .custom_parser(|s| s.parse::<f64>().ok().map(|v| ((v - 1.0) / 2.0).round()))
+                .text(text),
+        )
+        .changed();
+    *n = 2 * k + 1;
+    changed
+}
+
+/// Method-level settings shared by the main side and the comparison side.
+fn side_settings(ui: &mut Ui, id: &str, s: &mut Side) -> bool {
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        ui.label("method");
+        changed |= method_combo(ui, &format!("{id} method"), &mut s.sss);
+    });
+    if s.sss == SssMethod::Separable {
+        changed |= odd_slider(ui, &mut s.samples, 3, 63, "samples");
+    }
+    if s.sss == SssMethod::Gaussian6 {
+        ui.horizontal(|ui| {
+            ui.label("Gaussians");
+            for (k, g) in s.gaussians.iter_mut().enumerate() {
+                changed |= ui.checkbox(g, format!("{}", k + 2)).changed();
+            }
+        });
+    }
+    if s.sss != SssMethod::None {
+        changed |= ui
+            .checkbox(
+                &mut s.follow_surface,
+                "follow surface (stop at depth edges)",
+            )
+            .changed();
+    }
+    changed
+}
+
+fn sss(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Subsurface scattering")
+        .default_open(true)
+        .show(ui, |ui| {
+            if side_settings(ui, "a", &mut m.state.a) {
+                m.dirty.update = true;
+            }
+            let Some(first) = m
+                .state
+                .desc
+                .objects
+                .iter()
+                .find(|o| o.material.sss_strength > 0.0)
+                .map(|o| o.material.clone())
+            else {
+                ui.label("No skin object (sss_strength > 0).");
+                return;
+            };
+            if m.state.a.sss == SssMethod::Separable
+                || (m.state.compare && m.state.b.sss == SssMethod::Separable)
+            {
+                let (mut s, mut f) = (first.kernel_strength, first.falloff);
+                let mut changed = false;
+                ui.label("separable kernel (all skin materials)");
+                for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                    ui.horizontal(|ui| {
+                        changed |= ui
+                            .add(Slider::new(&mut s[c], 0.0..=1.0).text(format!("strength {name}")))
+                            .changed();
+                    });
+                }
+                for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                    changed |= ui
+                        .add(Slider::new(&mut f[c], 0.0..=1.0).text(format!("falloff {name}")))
+                        .changed();
+                }
+                if changed {
+                    m.set_kernel(s, f);
+                }
+            }
+        });
+}
+
+fn material(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Material")
+        .default_open(true)
+        .show(ui, |ui| {
+            let n = m.state.desc.objects.len();
+            if n == 0 {
+                ui.label("No objects.");
+                return;
+            }
+            m.ui.object = m.ui.object.min(n - 1);
+            ui.horizontal(|ui| {
+                ComboBox::from_id_salt("object")
+                    .selected_text(m.scene.objects[m.ui.object].name.clone())
+                    .show_ui(ui, |ui| {
+                        for (i, o) in m.scene.objects.iter().enumerate() {
+                            ui.selectable_value(&mut m.ui.object, i, o.name.clone());
+                        }
+                    });
+                ui.checkbox(&mut m.ui.edit_all_objects, "edit all");
+            });
+            let before = m.state.desc.objects[m.ui.object].material.clone();
+            let mat = &mut m.state.desc.objects[m.ui.object].material;
+            ComboBox::from_id_salt("profile")
+                .selected_text(format!("profile: {}", mat.profile))
+                .show_ui(ui, |ui| {
+                    for name in subsurface_profile::material_names() {
+                        ui.selectable_value(&mut mat.profile, name.to_string(), name);
+                    }
+                });
+            ui.add(Slider::new(&mut mat.sss_strength, 0.0..=1.0).text("SSS strength"));
+            ui.add(
+                Slider::new(&mut mat.sss_width, 0.05..=10.0)
+                    .logarithmic(true)
+                    .text("SSS width"),
+            );
+            ui.add(
+                Slider::new(&mut mat.translucency, 0.0..=20.0)
+                    .logarithmic(true)
+                    .text("translucency"),
+            );
+            ui.add(Slider::new(&mut mat.roughness, 0.05..=1.0).text("roughness"));
+            ui.add(Slider::new(&mut mat.specular, 0.0..=1.0).text("specular"));
+            m.material_edited(&before);
+        });
+}
+
+fn transmittance(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Transmittance")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut changed = false;
+            ui.horizontal(|ui| {
+                ui.label("method");
+                changed |= transmittance_combo(ui, "a transmittance", &mut m.state.a.transmittance);
+            });
+            let ns = &mut m.state.desc.render.normal_shrink;
+            let speed = ns.max(1e-4) * 0.02;
+            changed |= ui
+                .add(
+                    DragValue::new(ns)
+                        .speed(speed)
+                        .range(0.0..=f32::MAX)
+                        .prefix("normal shrink "),
+                )
+                .changed();
+            changed |= odd_slider(
+                ui,
+                &mut m.state.a.thickness_filter,
+                1,
+                15,
+                "thickness filter",
+            );
+            if changed {
+                m.dirty.update = true;
+            }
+        });
+}
+
+fn image(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Image")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut changed = ui
+                .add(
+                    Slider::new(&mut m.state.desc.render.exposure_ev, -8.0..=8.0)
+                        .text("exposure EV"),
+                )
+                .changed();
+            ui.horizontal(|ui| {
+                ui.label("debug view");
+                changed |= view_combo(ui, "a view", &mut m.state.a.view);
+            });
+            ui.label(
+                RichText::new("Thickness and irradiance-map views are not in the renderer yet.")
+                    .small(),
+            );
+            if changed {
+                m.dirty.update = true;
+            }
+        });
+}
+
+fn compare(ui: &mut Ui, m: &mut Model) {
+    egui::CollapsingHeader::new("Compare")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut changed = ui
+                .checkbox(
+                    &mut m.state.compare,
+                    "split screen: main settings | these (right)",
+                )
+                .changed();
+            ui.horizontal(|ui| {
+                if ui.button("main | SSS off").clicked() {
+                    if m.state.a.sss == SssMethod::None {
+                        m.state.a.sss = SssMethod::Separable;
+                    }
+                    m.state.b = Side {
+                        sss: SssMethod::None,
+                        ..m.state.a.clone()
+                    };
+                    m.state.compare = true;
+                    changed = true;
+                }
+                if ui.button("main | other method").clicked() {
+                    let other = if m.state.a.sss == SssMethod::Gaussian6 {
+                        SssMethod::Separable
+                    } else {
+                        SssMethod::Gaussian6
+                    };
+                    m.state.b = Side {
+                        sss: other,
+                        ..m.state.a.clone()
+                    };
+                    m.state.compare = true;
+                    changed = true;
+                }
+            });
+            if m.state.compare {
+                changed |= side_settings(ui, "b", &mut m.state.b);
+                ui.horizontal(|ui| {
+                    ui.label("transmittance");
+                    changed |=
+                        transmittance_combo(ui, "b transmittance", &mut m.state.b.transmittance);
+                });
+                changed |= odd_slider(
+                    ui,
+                    &mut m.state.b.thickness_filter,
+                    1,
+                    15,
+                    "thickness filter",
+                );
+                ui.horizontal(|ui| {
+                    ui.label("debug view");
+                    changed |= view_combo(ui, "b view", &mut m.state.b.view);
+                });
+                ui.add(Slider::new(&mut m.state.split, 0.0..=1.0).text("divider"));
+            }
+            if changed {
+                m.dirty.update = true;
+            }
+        });
+}
+
+fn timing_table(ui: &mut Ui, id: &str, t: &[subsurface_render::PassTiming]) {
+    if t.is_empty() {
+        ui.label("no GPU timestamps (yet)");
+        return;
+    }
+    egui::Grid::new(id).striped(true).show(ui, |ui| {
+        for p in t {
+            ui.label(&p.name);
+            ui.label(format!("{:.3} ms", p.ms));
+            ui.end_row();
+        }
+        ui.label(RichText::new("GPU total").strong());
+        ui.label(RichText::new(format!("{:.3} ms", t.iter().map(|p| p.ms).sum::<f64>())).strong());
+        ui.end_row();
+    });
+}
+
+fn timings(ui: &mut Ui, m: &mut Model, actions: &mut Vec<Action>) {
+    egui::CollapsingHeader::new("GPU timings")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.label(RichText::new(&m.stats.adapter).small());
+            ui.label(format!("frame {:.2} ms", m.stats.frame_ms));
+            if m.state.compare {
+                ui.label("left");
+            }
+            timing_table(ui, "timings a", &m.stats.timings_a);
+            if m.state.compare {
+                ui.label("right");
+                timing_table(ui, "timings b", &m.stats.timings_b);
+            }
+            ui.collapsing("Diagnostics", |ui| {
+                if ui
+                    .button("Simulate device loss")
+                    .on_hover_text("destroys the GPU device; the viewer recreates it")
+                    .clicked()
+                {
+                    actions.push(Action::LoseDevice);
+                }
+            });
+        });
+}
+
+/// Mouse and keys on the 3D view (the window outside the panel).
+fn view_input(ui: &mut Ui, rect: egui::Rect, m: &mut Model, vp: &Viewport) {
+    let response = ui.interact(rect, ui.scope_id().with("3d view"), Sense::click_and_drag());
+    let ppp = vp.pixels_per_point;
+    let h = vp.height as f32;
+    let fov = m.state.desc.camera.fov_y_deg;
+
+    // The split-screen divider: drawn over the view and dragged on its own.
+    if m.state.compare {
+        let x = m.state.split * vp.width as f32 / ppp;
+        let handle = egui::Rect::from_x_y_ranges(x - 4.0..=x + 4.0, rect.y_range());
+        let d = ui.interact(handle, ui.scope_id().with("divider"), Sense::drag());
+        if d.dragged() {
+            let px = (x + d.drag_delta().x) * ppp;
+            m.state.split = (px / vp.width.max(1) as f32).clamp(0.0, 1.0);
+        }
+        let stroke_color = if d.hovered() || d.dragged() {
+            Color32::WHITE
+        } else {
+            Color32::from_white_alpha(160)
+        };
+        ui.painter()
+            .vline(x, rect.y_range(), egui::Stroke::new(1.5, stroke_color));
+        if d.hovered() || d.dragged() {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+        }
+    }
+
+    let delta = response.drag_delta() * ppp;
+    let shift = ui.input(|i| i.modifiers.shift);
+    if response.dragged() && delta != egui::Vec2::ZERO {
+        if shift && response.dragged_by(PointerButton::Primary) {
+            m.drag_light(delta.x, delta.y, h);
+        } else {
+            match m.camera.mode {
+                Mode::Orbit => {
+                    if response.dragged_by(PointerButton::Primary) {
+                        m.camera.orbit.rotate(delta.x, delta.y, h);
+                    } else {
+                        m.camera.orbit.pan(delta.x, delta.y, h, fov);
+                    }
+                }
+                Mode::Fly => m.camera.fly.look(delta.x, delta.y, h, fov),
+            }
+            m.camera_moved();
+        }
+    }
+    if response.hovered() {
+        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            // egui gives points; about 50 points per wheel notch on common mice.
+            let steps = scroll / 50.0;
+            match m.camera.mode {
+                Mode::Orbit => m.camera.orbit.zoom(steps),
+                Mode::Fly => {
+                    let f = m.camera.fly.forward();
+                    m.camera.fly.position += f * m.camera.fly.focus * 0.1 * steps;
+                }
+            }
+            m.camera_moved();
+        }
+    }
+    if m.camera.mode == Mode::Fly && !ui.ctx().egui_wants_keyboard_input() {
+        let (input, fast) = ui.input(|i| {
+            let axis = |pos: egui::Key, neg: egui::Key| {
+                i.key_down(pos) as i32 as f32 - i.key_down(neg) as i32 as f32
+            };
+            (
+                FlyInput {
+                    forward: axis(egui::Key::W, egui::Key::S),
+                    right: axis(egui::Key::D, egui::Key::A),
+                    up: axis(egui::Key::E, egui::Key::Q),
+                },
+                i.modifiers.shift,
+            )
+        });
+        if input != FlyInput::default() {
+            // One focus distance per second: the speed follows the scene's scale.
+            let speed = m.camera.fly.focus * if fast { 4.0 } else { 1.0 };
+            m.camera.fly.step(input, vp.dt.min(0.1), speed);
+            m.camera_moved();
+        }
+    }
+}

@@ -1,0 +1,507 @@
+//! Everything the viewer lets you change, in one value that converts to what the renderer
+//! takes (a scene description and `RenderOptions`) and to a scene file that `subsurface
+//! render` reproduces.
+//!
+//! Material, camera, light, exposure and method edits go into the scene description itself
+//! (`[render] sss, samples, transmittance, thickness_filter`), so a saved scene carries them.
+//! The two settings the scene format has no key for (follow surface, the six-Gaussian
+//! switches) go into comment lines: `# render-flags:` holds the exact flags to give
+//! `subsurface render` (repeating the `[render]` methods for clarity) and `# viewer-flags:`
+//! what only the viewer knows; the viewer reads both back when it opens the file.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Parser, ValueEnum};
+use subsurface_render::passes::sss::{SssConfig, SssMethod};
+use subsurface_render::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
+use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
+use subsurface_render::{DebugView, RenderOptions};
+
+use crate::render::{SssArg, TransmittanceArg};
+
+/// Settings of one side of the comparison (the whole view when not comparing).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Side {
+    pub sss: SssMethod,
+    /// Separable: kernel taps (odd, 3..=63).
+    pub samples: u32,
+    pub follow_surface: bool,
+    /// Six-Gaussian: which of the five blurred Gaussians are on.
+    pub gaussians: [bool; 5],
+    pub transmittance: TransmittanceMethod,
+    /// Odd, 1..=15.
+    pub thickness_filter: u32,
+    pub view: DebugView,
+}
+
+impl Default for Side {
+    /// What `subsurface render` uses without flags.
+    fn default() -> Self {
+        let sss = SssConfig::default();
+        let t = TransmittanceConfig::default();
+        Self {
+            sss: sss.method,
+            samples: sss.samples,
+            follow_surface: sss.follow_surface,
+            gaussians: sss.gaussians_enabled,
+            transmittance: t.method,
+            thickness_filter: t.thickness_filter,
+            view: DebugView::Final,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewerState {
+    pub desc: SceneDesc,
+    /// Directory that relative asset paths in `desc` are resolved against.
+    pub base_dir: PathBuf,
+    /// The main settings: the whole view, or the left side of a comparison. Saved.
+    pub a: Side,
+    /// Split screen: `a` left of the divider, `b` right of it. Not saved.
+    pub compare: bool,
+    pub b: Side,
+    /// Divider position as a fraction of the view width.
+    pub split: f32,
+}
+
+/// The flags of a `# render-flags:` comment: the `render` flags the scene format lacks.
+#[derive(Parser, Debug)]
+#[command(no_binary_name = true)]
+struct HeaderFlags {
+    #[arg(long, value_enum)]
+    sss: Option<SssArg>,
+    #[arg(long)]
+    samples: Option<u32>,
+    #[arg(long)]
+    no_follow_surface: bool,
+    #[arg(long, value_enum)]
+    transmittance: Option<TransmittanceArg>,
+    #[arg(long)]
+    thickness_filter: Option<u32>,
+    /// Viewer only (no `render` flag): 0/1 per blurred Gaussian of the six-Gaussian method.
+    #[arg(long, value_delimiter = ',')]
+    gaussians: Vec<u8>,
+}
+
+const FLAGS_PREFIX: &str = "# render-flags:";
+const VIEWER_FLAGS_PREFIX: &str = "# viewer-flags:";
+
+/// The SSS methods `subsurface render` offers, in its order.
+pub fn sss_methods() -> Vec<SssMethod> {
+    SssArg::value_variants()
+        .iter()
+        .map(|&a| SssMethod::from(a))
+        .collect()
+}
+
+/// The transmittance methods `subsurface render` offers, in its order. Matched to the
+/// renderer's enum by name (its serde names are the flag values), so new variants need no
+/// change here.
+pub fn transmittance_methods() -> Vec<TransmittanceMethod> {
+    TransmittanceArg::value_variants()
+        .iter()
+        .map(|&a| transmittance_from_arg(a))
+        .collect()
+}
+
+pub fn transmittance_from_arg(t: TransmittanceArg) -> TransmittanceMethod {
+    t.to_possible_value()
+        .and_then(|v| {
+            serde_json::from_value(serde_json::Value::String(v.get_name().to_string())).ok()
+        })
+        .unwrap_or_default()
+}
+
+/// The flag value of a transmittance method (e.g. "seed-report").
+pub fn transmittance_name(t: TransmittanceMethod) -> String {
+    match serde_json::to_value(t) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => format!("{t:?}").to_lowercase(),
+    }
+}
+
+impl ViewerState {
+    pub fn new(desc: SceneDesc, base_dir: PathBuf) -> Self {
+        let r = &desc.render;
+        let a = Side {
+            sss: r.sss,
+            samples: r.samples,
+            transmittance: r.transmittance,
+            thickness_filter: r.thickness_filter,
+            ..Side::default()
+        };
+        Self {
+            desc,
+            base_dir,
+            a,
+            compare: false,
+            b: Side {
+                sss: SssMethod::None,
+                ..Side::default()
+            },
+            split: 0.5,
+        }
+    }
+
+    /// Parses a scene file's text, including a `# render-flags:` comment if it has one.
+    pub fn from_toml_str(text: &str, base_dir: PathBuf, name_for_errors: &str) -> Result<Self> {
+        let desc = SceneDesc::from_toml_str(text, name_for_errors)?;
+        let mut state = Self::new(desc, base_dir);
+        let mut words: Vec<String> = Vec::new();
+        for line in text.lines() {
+            for prefix in [FLAGS_PREFIX, VIEWER_FLAGS_PREFIX] {
+                if let Some(rest) = line.strip_prefix(prefix) {
+                    words.extend(rest.split_whitespace().map(str::to_string));
+                }
+            }
+        }
+        let flags = HeaderFlags::try_parse_from(&words).map_err(|e| {
+            let msg = e.to_string();
+            let first = msg
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ");
+            anyhow::anyhow!("{name_for_errors}: {FLAGS_PREFIX} comment: {first}")
+        })?;
+        // The methods are scene keys ([render]); the header repeats them for `render`, but the
+        // scene wins if the two disagree (a hand-edited file).
+        let _ = (
+            flags.sss,
+            flags.samples,
+            flags.transmittance,
+            flags.thickness_filter,
+        );
+        let a = &mut state.a;
+        a.follow_surface = !flags.no_follow_surface;
+        if !flags.gaussians.is_empty() {
+            anyhow::ensure!(
+                flags.gaussians.len() == 5 && flags.gaussians.iter().all(|&g| g <= 1),
+                "{name_for_errors}: {VIEWER_FLAGS_PREFIX} --gaussians: expected five 0/1 values"
+            );
+            for (g, &v) in a.gaussians.iter_mut().zip(&flags.gaussians) {
+                *g = v == 1;
+            }
+        }
+        state
+            .options(&state.a)
+            .map_err(|e| anyhow::anyhow!("{name_for_errors}: {FLAGS_PREFIX} comment: {e:#}"))?;
+        Ok(state)
+    }
+
+    /// The `subsurface render` flags that reproduce side `a` (the rest is in the scene).
+    pub fn render_flags(&self) -> String {
+        let a = &self.a;
+        let mut s = format!(
+            "--sss {} --samples {} --transmittance {} --thickness-filter {}",
+            a.sss.name(),
+            a.samples,
+            transmittance_name(a.transmittance),
+            a.thickness_filter
+        );
+        if !a.follow_surface {
+            s.push_str(" --no-follow-surface");
+        }
+        s
+    }
+
+    /// Scene file text: a header with the render flags, then the scene. Relative asset
+    /// paths are kept when the file goes to the directory they are relative to, and made
+    /// absolute otherwise, so the saved scene loads from wherever it is written.
+    pub fn to_toml(&self, dest: &Path) -> String {
+        let dest_dir = dest
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let same_dir = same_path(dest_dir, &self.base_dir);
+        let desc = if same_dir {
+            self.desc_for_save()
+        } else {
+            Self {
+                desc: self.desc_for_save(),
+                ..self.clone()
+            }
+            .desc_with_absolute_paths()
+        };
+        let mut header = String::from(
+            "# Scene saved by `subsurface view`. `subsurface render FILE` plus these flags (they\n\
+             # repeat [render] and add what the scene format has no key for) reproduces the view:\n",
+        );
+        header.push_str(&format!("{FLAGS_PREFIX} {}\n", self.render_flags()));
+        if self.a.gaussians != [true; 5] {
+            let g: Vec<&str> = self
+                .a
+                .gaussians
+                .iter()
+                .map(|&g| if g { "1" } else { "0" })
+                .collect();
+            header.push_str(
+                "# Gaussians switched off in the viewer (`render` has no flag for this, it uses all):\n",
+            );
+            header.push_str(&format!(
+                "{VIEWER_FLAGS_PREFIX} --gaussians {}\n",
+                g.join(",")
+            ));
+        }
+        format!("{header}\n{}", desc.to_toml_string())
+    }
+
+    /// `desc` with the main side's methods in `[render]`.
+    pub fn desc_for_save(&self) -> SceneDesc {
+        let mut d = self.desc.clone();
+        let r = &mut d.render;
+        r.sss = self.a.sss;
+        r.samples = self.a.samples;
+        r.transmittance = self.a.transmittance;
+        r.thickness_filter = self.a.thickness_filter;
+        d
+    }
+
+    /// `desc` with every relative asset path resolved against `base_dir`.
+    pub fn desc_with_absolute_paths(&self) -> SceneDesc {
+        let abs = |p: &str| -> String {
+            let path = Path::new(p);
+            if p == BUILTIN_HAND || path.is_absolute() {
+                return p.to_string();
+            }
+            let joined = self.base_dir.join(path);
+            std::path::absolute(&joined)
+                .unwrap_or(joined)
+                .display()
+                .to_string()
+        };
+        let mut d = self.desc.clone();
+        for o in &mut d.objects {
+            if let MeshDesc::Gltf { path } = &mut o.mesh {
+                *path = abs(path);
+            }
+            let m = &mut o.material;
+            for p in [
+                &mut m.albedo_texture,
+                &mut m.normal_texture,
+                &mut m.specular_texture,
+            ]
+            .into_iter()
+            .flatten()
+            {
+                *p = abs(p);
+            }
+        }
+        d
+    }
+
+    /// Kernel strength and falloff: the separable kernel is one per frame, taken from the
+    /// first skin material as `SssConfig::for_scene` does, so `render` picks the same.
+    fn kernel_params(&self) -> ([f32; 3], [f32; 3]) {
+        let d = SssConfig::default();
+        self.desc
+            .objects
+            .iter()
+            .find(|o| o.material.sss_strength > 0.0)
+            .map_or((d.strength, d.falloff), |o| {
+                (o.material.kernel_strength, o.material.falloff)
+            })
+    }
+
+    /// Render options for one side, at the scene's size (the viewer keeps that at the
+    /// window's size).
+    pub fn options(&self, side: &Side) -> Result<RenderOptions> {
+        let r = &self.desc.render;
+        let (strength, falloff) = self.kernel_params();
+        let sss = SssConfig {
+            method: side.sss,
+            samples: side.samples,
+            strength,
+            falloff,
+            follow_surface: side.follow_surface,
+            gaussians_enabled: side.gaussians,
+            ..SssConfig::default()
+        };
+        sss.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+        let transmittance = TransmittanceConfig {
+            method: side.transmittance,
+            normal_shrink: r.normal_shrink,
+            thickness_filter: side.thickness_filter,
+        };
+        transmittance
+            .validate()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(RenderOptions {
+            width: r.width,
+            height: r.height,
+            exposure_ev: r.exposure_ev,
+            view: side.view,
+            sss,
+            transmittance,
+            baseline_copy: false,
+        })
+    }
+
+    /// Writes the scene file atomically.
+    pub fn save(&self, dest: &Path) -> Result<()> {
+        let mut pending = crate::output::PendingFile::create(dest)?;
+        pending.write_bytes(self.to_toml(dest).as_bytes())?;
+        pending.commit()
+    }
+
+    /// Reads a scene file saved by the viewer (or any scene file).
+    pub fn load(path: &Path) -> Result<Self> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).with_context(|| format!("{name}: cannot read"))?;
+        let base = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        Self::from_toml_str(&text, base, &name)
+    }
+}
+
+fn same_path(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => std::path::absolute(a).ok() == std::path::absolute(b).ok(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subsurface_render::scene::{DEFAULT_SCENE_TOML, LightDesc, LightKind};
+
+    fn edited() -> ViewerState {
+        let mut s =
+            ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
+        s.a = Side {
+            sss: SssMethod::Gaussian6,
+            samples: 25,
+            follow_surface: false,
+            gaussians: [true, false, true, true, false],
+            transmittance: TransmittanceMethod::Beer,
+            thickness_filter: 5,
+            view: DebugView::Final,
+        };
+        let d = &mut s.desc;
+        d.render.exposure_ev = 1.25;
+        d.render.normal_shrink = 0.0007;
+        d.render.width = 333;
+        d.render.height = 211;
+        d.camera.position = [0.1, 0.2, 0.45];
+        d.lights[0].position = [0.05, 0.1, -0.3];
+        d.lights[1].color = [0.3, 0.6, 0.9];
+        d.lights[1].shadow_map_size = 0;
+        d.lights.push(LightDesc {
+            kind: LightKind::Point,
+            position: [0.0, 0.3, 0.3],
+            intensity: 0.07,
+            ..Default::default()
+        });
+        let m = &mut d.objects[0].material;
+        m.sss_width = 1.7;
+        m.translucency = 2.5;
+        m.profile = "marble".into();
+        m.kernel_strength = [0.5, 0.3, 0.2];
+        m.falloff = [0.9, 0.4, 0.35];
+        s
+    }
+
+    #[test]
+    fn defaults_match_render_without_flags() {
+        let s =
+            ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
+        let o = s.options(&s.a).unwrap();
+        let scene = subsurface_render::Scene::default_scene();
+        let mut r = crate::render::options(&scene, None, None, None).unwrap();
+        r.sss = SssConfig::for_scene(&scene);
+        assert_eq!(o.sss, r.sss);
+        assert_eq!(o.transmittance, r.transmittance);
+        assert_eq!(
+            (o.width, o.height, o.exposure_ev),
+            (r.width, r.height, r.exposure_ev)
+        );
+    }
+
+    #[test]
+    fn saved_scene_reads_back_to_the_same_state() {
+        let dir = std::env::temp_dir().join(format!("subsurface-view-rt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("saved.toml");
+        let s = edited();
+        s.save(&file).unwrap();
+        let back = ViewerState::load(&file).unwrap();
+        let saved = ViewerState {
+            desc: s.desc_for_save(),
+            ..s.clone()
+        };
+        assert_eq!(back.desc, saved.desc_with_absolute_paths());
+        assert_eq!(back.a, s.a);
+        assert_eq!(
+            back.options(&back.a).unwrap().sss,
+            s.options(&s.a).unwrap().sss
+        );
+        // Saving the loaded state again gives the same file.
+        let file2 = dir.join("again.toml");
+        back.save(&file2).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&file).unwrap(),
+            std::fs::read_to_string(&file2).unwrap()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn render_flags_parse_as_render_would() {
+        let s = edited();
+        let text = s.to_toml(Path::new("x.toml"));
+        let flags = text
+            .lines()
+            .find_map(|l| l.strip_prefix(FLAGS_PREFIX))
+            .unwrap();
+        // The same words through `render`'s own argument parser give the same options.
+        #[derive(clap::Parser)]
+        struct R {
+            #[command(flatten)]
+            sss: crate::render::SssArgs,
+            #[command(flatten)]
+            t: crate::render::TransmittanceArgs,
+        }
+        let words = std::iter::once("render").chain(flags.split_whitespace());
+        let r = R::try_parse_from(words).unwrap();
+        let mut scene = subsurface_render::Scene::from_desc(
+            SceneDesc::from_toml_str(&text, "x.toml").unwrap(),
+            Path::new("."),
+            "x.toml",
+        )
+        .unwrap();
+        let mut want = s.options(&s.a).unwrap();
+        // `render` has no flag for the Gaussians; it renders with all of them.
+        want.sss.gaussians_enabled = [true; 5];
+        assert_eq!(r.sss.apply(&mut scene).unwrap(), want.sss);
+        assert_eq!(r.t.config(&scene).unwrap(), want.transmittance);
+    }
+
+    #[test]
+    fn relative_paths_become_absolute_elsewhere() {
+        let text = DEFAULT_SCENE_TOML.replace("builtin:hand", "models/hand.glb");
+        let s = ViewerState::from_toml_str(&text, PathBuf::from("/data/scenes"), "t").unwrap();
+        let there = s.to_toml(Path::new("/elsewhere/out.toml"));
+        assert!(there.contains("/data/scenes/models/hand.glb"), "{there}");
+        let d = s.desc_with_absolute_paths();
+        assert!(
+            matches!(&d.objects[0].mesh, MeshDesc::Gltf { path } if path == "/data/scenes/models/hand.glb")
+        );
+    }
+
+    #[test]
+    fn bad_header_flags_are_one_line_errors() {
+        let text = format!("{FLAGS_PREFIX} --samples x\n{DEFAULT_SCENE_TOML}");
+        let e = ViewerState::from_toml_str(&text, PathBuf::from("."), "s.toml").unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(
+            msg.starts_with("s.toml: ") && msg.contains("samples"),
+            "{msg}"
+        );
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+}

@@ -1,0 +1,328 @@
+//! `subsurface view` in a real window: scripted runs (`--frames N`) under the session's
+//! display or Xvfb, compared with `subsurface render` of the same scene. Without a display,
+//! xvfb-run or a GPU these tests skip with a message, unless SUBSURFACE_REQUIRE_GPU=1.
+//!
+//! The window-settings round trip and camera input mapping are unit tests beside the code
+//! (`cargo test -p subsurface-cli --bin subsurface view::`); here the binary is checked end
+//! to end.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::Mutex;
+
+/// xvfb-run -a picks a free display number racily: one window test at a time.
+static WINDOW: Mutex<()> = Mutex::new(());
+
+const W: &str = "320";
+const H: &str = "240";
+
+fn require_gpu() -> bool {
+    std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+fn skip(why: &str) -> bool {
+    assert!(!require_gpu(), "SUBSURFACE_REQUIRE_GPU=1 but {why}");
+    eprintln!("skipped: {why}");
+    false
+}
+
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("subsurface-view-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_subsurface")
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(program).is_file()))
+}
+
+/// The command that runs `subsurface` with a window: directly on the session's display,
+/// else inside xvfb-run. None (after a skip message) when neither exists.
+fn windowed() -> Option<Command> {
+    let has_display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|k| std::env::var_os(k).is_some_and(|v| !v.is_empty()));
+    if has_display {
+        return Some(Command::new(bin()));
+    }
+    if on_path("xvfb-run") {
+        let mut c = Command::new("xvfb-run");
+        c.args(["-a", "-s", "-screen 0 1280x800x24", bin()]);
+        return Some(c);
+    }
+    skip("no DISPLAY and no xvfb-run");
+    None
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+fn render(args: &[&str], dir: &Path) -> Output {
+    Command::new(bin())
+        .arg("render")
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// Renders the reference first: no adapter means skip (or fail when required).
+fn gpu_available(dir: &Path) -> bool {
+    let out = render(
+        &["--width", "8", "--height", "8", "--out", "probe.png"],
+        dir,
+    );
+    out.status.success() || skip(&format!("no GPU adapter: {}", text(&out)))
+}
+
+fn view(args: &[&str], dir: &Path) -> Option<Output> {
+    let mut c = windowed()?;
+    let _one_at_a_time = WINDOW.lock().unwrap_or_else(|e| e.into_inner());
+    let out = c
+        .arg("view")
+        .args(["--width", W, "--height", H])
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let all = text(&out);
+    assert!(!all.contains("panicked"), "{all}");
+    assert!(out.status.success(), "view failed: {all}");
+    Some(out)
+}
+
+fn rgb(path: &Path) -> (u32, u32, Vec<u8>) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+/// Mean FLIP error of `test` against `reference`, over columns `x0..x1`.
+fn flip_mean(reference: &Path, test: &Path, cols: Option<(u32, u32)>) -> f32 {
+    let (w, h, r) = rgb(reference);
+    let (tw, th, t) = rgb(test);
+    assert_eq!(
+        (w, h),
+        (tw, th),
+        "{} vs {}",
+        reference.display(),
+        test.display()
+    );
+    let (x0, x1) = cols.unwrap_or((0, w));
+    let crop = |v: &[u8]| -> Vec<u8> {
+        (0..h)
+            .flat_map(|y| {
+                let row = (y * w) as usize * 3;
+                v[row + x0 as usize * 3..row + x1 as usize * 3].to_vec()
+            })
+            .collect()
+    };
+    let cw = x1 - x0;
+    let err = nv_flip::flip(
+        nv_flip::FlipImageRgb8::with_data(cw, h, &crop(&r)),
+        nv_flip::FlipImageRgb8::with_data(cw, h, &crop(&t)),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    nv_flip::FlipPool::from_image(&err).mean()
+}
+
+/// Both paths end in the same tone-map shader on the same device; only the rasteriser's
+/// order could differ, so the tolerance is tight.
+const TOLERANCE: f32 = 0.01;
+
+#[test]
+fn scripted_view_screenshot_matches_render() {
+    let dir = tempdir("match");
+    if !gpu_available(&dir) {
+        return;
+    }
+    let Some(_) = view(&["--frames", "30", "--screenshot", "view.png"], &dir) else {
+        return;
+    };
+    let out = render(&["--width", W, "--height", H, "--out", "render.png"], &dir);
+    assert!(out.status.success(), "{}", text(&out));
+    let e = flip_mean(&dir.join("render.png"), &dir.join("view.png"), None);
+    assert!(e <= TOLERANCE, "mean FLIP {e} > {TOLERANCE}");
+}
+
+#[test]
+fn saved_scene_renders_like_the_view_and_reads_back() {
+    let dir = tempdir("save");
+    if !gpu_available(&dir) {
+        return;
+    }
+    let settings = [
+        "--sss",
+        "gaussian6",
+        "--transmittance",
+        "beer",
+        "--thickness-filter",
+        "5",
+        "--exposure",
+        "0.5",
+        "--no-follow-surface",
+    ];
+    let mut args = settings.to_vec();
+    args.extend([
+        "--frames",
+        "3",
+        "--screenshot",
+        "view.png",
+        "--save-scene",
+        "saved.toml",
+    ]);
+    if view(&args, &dir).is_none() {
+        return;
+    }
+    let saved = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
+    assert!(saved.contains("sss = \"gaussian6\""), "{saved}");
+    // The file names the render flags that reproduce the view; render with exactly those.
+    let flags: Vec<&str> = saved
+        .lines()
+        .find_map(|l| l.strip_prefix("# render-flags:"))
+        .expect("a # render-flags: line")
+        .split_whitespace()
+        .collect();
+    assert!(flags.contains(&"--no-follow-surface"), "{flags:?}");
+    let mut r = vec!["saved.toml", "--out", "render.png"];
+    r.extend(&flags);
+    let out = render(&r, &dir);
+    assert!(out.status.success(), "{}", text(&out));
+    let e = flip_mean(&dir.join("render.png"), &dir.join("view.png"), None);
+    assert!(e <= TOLERANCE, "mean FLIP {e} > {TOLERANCE}");
+
+    // Opening the saved scene and saving again changes nothing.
+    view(
+        &["saved.toml", "--frames", "1", "--save-scene", "again.toml"],
+        &dir,
+    );
+    let again = std::fs::read_to_string(dir.join("again.toml")).unwrap();
+    assert_eq!(saved, again);
+}
+
+#[test]
+fn split_screen_shows_both_settings() {
+    let dir = tempdir("split");
+    if !gpu_available(&dir) {
+        return;
+    }
+    if view(
+        &[
+            "--compare",
+            "none",
+            "--frames",
+            "3",
+            "--screenshot",
+            "split.png",
+        ],
+        &dir,
+    )
+    .is_none()
+    {
+        return;
+    }
+    for (name, extra) in [("on.png", "separable"), ("off.png", "none")] {
+        let out = render(
+            &["--width", W, "--height", H, "--sss", extra, "--out", name],
+            &dir,
+        );
+        assert!(out.status.success(), "{}", text(&out));
+    }
+    let split = dir.join("split.png");
+    let (on, off) = (dir.join("on.png"), dir.join("off.png"));
+    // The divider starts in the middle: SSS on left of it, off right of it.
+    assert!(flip_mean(&on, &split, Some((0, 160))) <= TOLERANCE);
+    assert!(flip_mean(&off, &split, Some((160, 320))) <= TOLERANCE);
+    // And the two halves differ where it matters: the comparison is not a no-op.
+    assert!(flip_mean(&on, &off, None) > 0.0);
+}
+
+#[test]
+fn a_lost_device_is_recreated() {
+    let dir = tempdir("lost");
+    if !gpu_available(&dir) {
+        return;
+    }
+    if view(
+        &[
+            "--frames",
+            "8",
+            "--lose-device-at",
+            "3",
+            "--screenshot",
+            "view.png",
+        ],
+        &dir,
+    )
+    .is_none()
+    {
+        return;
+    }
+    let out = render(&["--width", W, "--height", H, "--out", "render.png"], &dir);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(flip_mean(&dir.join("render.png"), &dir.join("view.png"), None) <= TOLERANCE);
+}
+
+#[test]
+fn bad_arguments_fail_in_one_line_before_a_window_opens() {
+    let dir = tempdir("args");
+    for (args, needle) in [
+        (
+            vec!["--screenshot", "x.png"],
+            "--screenshot: needs --frames",
+        ),
+        (vec!["--frames", "0"], "--frames"),
+        (vec!["--frames", "1", "--samples", "4"], "samples"),
+        (
+            vec!["--frames", "1", "--thickness-filter", "2"],
+            "thickness",
+        ),
+        (vec!["missing.toml"], "missing.toml"),
+    ] {
+        // No display needed: these are checked before the event loop starts.
+        let out = Command::new(bin())
+            .arg("view")
+            .args(&args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {err}");
+        assert!(lines[0].contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!dir.join("x.png").exists());
+    }
+}
+
+#[test]
+fn no_display_is_a_one_line_error() {
+    let dir = tempdir("nodisplay");
+    let out = Command::new(bin())
+        .args(["view", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("error: cannot open a window"), "{err}");
+    assert!(!err.contains("panicked") && !err.contains(".rs:"), "{err}");
+}

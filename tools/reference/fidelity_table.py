@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""Writes docs/fidelity.md (the error of every method x canonical scene against the committed
+path-traced references), references/fidelity.json (the values the regression guard in
+crates/subsurface-cli/tests/fidelity.rs checks against) and references/compare/*.png.
+
+    python3 tools/reference/fidelity_table.py
+
+Run from anywhere after `cargo build -p subsurface-cli` (or set SUBSURFACE_BIN). Needs a GPU
+adapter (lavapipe will do: WGPU_BACKEND=vulkan). Head scenes need ../shared/assets.
+"""
+
+import datetime
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, HERE)
+from make_references import subsurface_bin  # noqa: E402
+
+# Every screen-space method with the default transmittance, every transmittance method with
+# the default blur, and the baseline without either.
+COMBOS = [("none", "off")] + [(s, "paper") for s in ("none", "gaussian6", "separable", "hable13")] + [
+    ("separable", t) for t in ("off", "beer", "seed-report")
+]
+# Side-by-side images kept in the repository (the others go to a temporary directory).
+KEEP_IMAGES = {("none", "off"), ("separable", "paper")}
+
+
+def main():
+    exe = subsurface_bin()
+    env = dict(os.environ)
+    env.setdefault("WGPU_BACKEND", "vulkan")
+    names = sorted(os.path.basename(p)[:-4] for p in glob.glob(os.path.join(ROOT, "references/*.exr")))
+    os.makedirs(os.path.join(ROOT, "references/compare"), exist_ok=True)
+    results = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in names:
+            scene = os.path.join(ROOT, "scenes/canonical", name + ".toml")
+            results[name] = {}
+            for sss, tr in COMBOS:
+                key = f"{sss}+{tr}"
+                img = f"references/compare/{name}--{sss}--{tr}.png"
+                out = os.path.join(ROOT, img) if (sss, tr) in KEEP_IMAGES else os.path.join(tmp, "x.png")
+                r = subprocess.run(
+                    [exe, "compare", os.path.join(ROOT, "references", name + ".exr"), scene,
+                     "--sss", sss, "--transmittance", tr, "--json", "--out", out],
+                    capture_output=True, text=True, env=env)
+                if r.returncode != 0:
+                    sys.exit(f"{name} {key}: {r.stderr.strip()}")
+                j = json.loads(r.stdout)
+                results[name][key] = {
+                    "rmse": j["rmse"],
+                    "rel_rmse": j["rel_rmse"],
+                    "flip_mean": j["flip_mean"],
+                    "regions": {g["name"]: g["rel_error"] for g in j["regions"]},
+                    "image": img if (sss, tr) in KEEP_IMAGES else None,
+                }
+                print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} FLIP {j['flip_mean']:.4f}", file=sys.stderr)
+    with open(os.path.join(ROOT, "references/fidelity.json"), "w") as f:
+        json.dump({"generated_by": "tools/reference/fidelity_table.py", "scenes": results}, f, indent=1)
+        f.write("\n")
+    write_markdown(results)
+
+
+def write_markdown(results):
+    path = os.path.join(ROOT, "docs/fidelity.md")
+    with open(path) as f:
+        text = f.read()
+    begin, end = "<!-- table: begin (tools/reference/fidelity_table.py) -->", "<!-- table: end -->"
+    lines = [begin, "", f"Generated {datetime.date.today().isoformat()} on `{os.environ.get('WGPU_BACKEND', 'vulkan')}`.", ""]
+    for name, combos in results.items():
+        lines.append(f"### {name}")
+        lines.append("")
+        region_names = list(next(iter(combos.values()))["regions"])
+        lines.append("| sss + transmittance | RMSE | rel. RMSE | FLIP | " + " | ".join(f"{r} (mean err.)" for r in region_names) + " |")
+        lines.append("|---|---:|---:|---:|" + "---:|" * len(region_names))
+        for key, v in combos.items():
+            regs = " | ".join(f"{100 * v['regions'][r]:+.1f}%" for r in region_names)
+            lines.append(f"| `{key}` | {v['rmse']:.4f} | {100 * v['rel_rmse']:.0f}% | {v['flip_mean']:.3f} | {regs} |")
+        lines.append("")
+        for key, v in combos.items():
+            if v["image"]:
+                lines.append(f"`{key}` (real-time | reference | FLIP):")
+                lines.append("")
+                lines.append(f"![{name} {key}](../{v['image']})")
+                lines.append("")
+    lines.append(end)
+    if begin in text and end in text:
+        text = text[: text.index(begin)] + "\n".join(lines) + text[text.index(end) + len(end):]
+    else:
+        text = text.rstrip() + "\n\n" + "\n".join(lines) + "\n"
+    with open(path, "w") as f:
+        f.write(text)
+    print(f"wrote {path}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

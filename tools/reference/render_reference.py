@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Path-traced reference of a scene exported by `subsurface export-mitsuba`.
+
+    python3 tools/reference/render_reference.py EXPORT_DIR/scene.xml --out ref.exr \
+        [--spp 128] [--seed 0] [--width W --height H] [--max-depth 256] [--variant scalar_rgb]
+
+Needs Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`); the `scalar_rgb` variant runs on
+any CPU. The image is rendered in passes of --pass-spp samples, each with its own seed derived
+from --seed (so the result depends only on --seed and --spp), and progress is printed after
+every pass. The output is a linear-radiance RGB EXR (float32), the same radiance units as our
+renderer's diffuse + specular (the exporter scales the emitters, docs/fidelity.md).
+"""
+
+import argparse
+import os
+import sys
+import time
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", help="scene.xml written by `subsurface export-mitsuba`")
+    p.add_argument("--out", required=True, help="output EXR (linear RGB)")
+    p.add_argument("--spp", type=int, default=128, help="samples per pixel (default 128)")
+    p.add_argument("--pass-spp", type=int, default=16, help="samples per progress pass (default 16)")
+    p.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
+    p.add_argument("--width", type=int, help="override the exported width")
+    p.add_argument("--height", type=int, help="override the exported height")
+    p.add_argument("--max-depth", type=int, help="override the exported max_depth (256)")
+    p.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant (default scalar_rgb)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    a = p.parse_args(argv)
+    for k in ("spp", "pass_spp"):
+        if getattr(a, k) < 1:
+            p.error(f"--{k.replace('_', '-')}: must be at least 1")
+    return a
+
+
+def render(a):
+    """Returns (image as a list of rows of (r, g, b), seconds). Raises on any Mitsuba error."""
+    import mitsuba as mi
+
+    mi.set_variant(a.variant)
+    params = {}
+    if a.width:
+        params["width"] = a.width
+    if a.height:
+        params["height"] = a.height
+    if a.max_depth:
+        params["max_depth"] = a.max_depth
+    scene = mi.load_file(a.scene, **params)
+    passes = -(-a.spp // a.pass_spp)
+    acc = None
+    done = 0
+    start = time.time()
+    for i in range(passes):
+        n = min(a.pass_spp, a.spp - done)
+        # Distinct, deterministic seeds per pass: the sum is one render of a.spp samples.
+        img = mi.render(scene, spp=n, seed=a.seed * 1000003 + i)
+        # Plain Dr.Jit tensors (no numpy needed): sum of the passes weighted by their spp.
+        acc = img * n if acc is None else acc + img * n
+        done += n
+        if not a.quiet:
+            el = time.time() - start
+            eta = el / done * (a.spp - done)
+            print(
+                f"\r{os.path.basename(a.out)}: {done}/{a.spp} spp, {el:.0f} s, about {eta:.0f} s left ",
+                end="",
+                file=sys.stderr,
+                flush=True,
+            )
+    if not a.quiet:
+        print(file=sys.stderr)
+    return acc / done, time.time() - start
+
+
+def write_exr(path, img):
+    """Writes through a temporary file so that a failure leaves no partial EXR."""
+    import mitsuba as mi
+
+    tmp = os.path.join(os.path.dirname(os.path.abspath(path)), f".{os.path.basename(path)}.partial-{os.getpid()}.exr")
+    try:
+        # Half floats: plenty for radiance (11-bit mantissa, range to 65504) at half the size,
+        # which matters for references committed to the repository.
+        bmp = mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB)
+        bmp = bmp.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float16, srgb_gamma=False)
+        bmp.write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def main(argv=None):
+    a = parse_args(argv if argv is not None else sys.argv[1:])
+    try:
+        import mitsuba  # noqa: F401
+    except ImportError:
+        print("error: mitsuba is not installed (python3 -m pip install mitsuba==3.9.1)", file=sys.stderr)
+        return 2
+    if not os.path.isfile(a.scene):
+        print(f"error: {a.scene}: no such file", file=sys.stderr)
+        return 1
+    try:
+        img, secs = render(a)
+        write_exr(a.out, img)
+    except Exception as e:  # Mitsuba raises RuntimeError with multi-line messages
+        msg = " ".join(str(e).split())
+        print(f"error: {a.scene}: {msg}", file=sys.stderr)
+        return 1
+    import drjit as dr
+
+    h, w = img.shape[:2]
+    mean = dr.mean(img.array)
+    print(f"{a.out}: {w}x{h}, {a.spp} spp, seed {a.seed}, {secs:.1f} s, mean radiance {mean:.5g}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
