@@ -178,9 +178,19 @@ fn bench_json_has_runs_with_positive_times() {
         assert!(r["width"] == 64 && r["height"] == 48, "{r}");
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
         let passes = r["passes"].as_array().unwrap();
-        assert!(passes.iter().all(|p| p["name"].is_string() && p["ms"].as_f64().unwrap() >= 0.0));
+        assert!(
+            passes
+                .iter()
+                .all(|p| p["name"].is_string() && p["ms"].as_f64().unwrap() >= 0.0)
+        );
     }
     assert_eq!(runs[1]["sss"], "separable");
     assert_eq!(runs[3]["characters"], 2);
-    assert!(runs[1]["passes"].as_array().unwrap().iter().any(|p| p["name"] == "sss"));
+    assert!(
+        runs[1]["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["name"] == "sss")
+    );
 }

@@ -227,6 +227,14 @@ fn update_matches_a_fresh_renderer() {
     opts.exposure_ev = 0.5;
     r.update(&edited, &opts).unwrap();
     let updated = r.render().unwrap().image;
-    let fresh = Renderer::new(&ctx, &edited, opts).unwrap().render().unwrap().image;
-    assert_eq!(updated.as_raw(), fresh.as_raw(), "update() and a new Renderer differ");
+    let fresh = Renderer::new(&ctx, &edited, opts)
+        .unwrap()
+        .render()
+        .unwrap()
+        .image;
+    assert_eq!(
+        updated.as_raw(),
+        fresh.as_raw(),
+        "update() and a new Renderer differ"
+    );
 }
