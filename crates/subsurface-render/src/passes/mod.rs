@@ -1,6 +1,7 @@
 //! One module per pass, each with its WGSL beside it.
 
 pub mod copy;
+pub mod fullscreen;
 pub mod lighting;
 pub mod shadow;
 pub mod sss;

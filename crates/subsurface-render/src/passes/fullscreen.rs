@@ -1,0 +1,35 @@
+//! The full-screen-triangle pipeline that the image passes (SSS, tone map, copy) share: each
+//! WGSL file declares `vs_fullscreen`, and only the fragment entry point and targets differ.
+
+/// A pipeline drawing one full-screen triangle (3 vertices, no vertex buffer) with
+/// `module`'s `vs_fullscreen` and the fragment entry point `fragment`. `layout: None` lets
+/// wgpu derive the bind group layouts from the shader.
+pub fn pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: Option<&wgpu::PipelineLayout>,
+    fragment: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(fragment),
+        layout,
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_fullscreen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fragment),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
