@@ -7,8 +7,13 @@
 Needs Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`); the `scalar_rgb` variant runs on
 any CPU. The image is rendered in passes of --pass-spp samples, each with its own seed derived
 from --seed (so the result depends only on --seed and --spp), and progress is printed after
-every pass. The output is a linear-radiance RGB EXR (float32), the same radiance units as our
+every pass. The output is a linear-radiance RGB EXR (half float), the same radiance units as our
 renderer's diffuse + specular (the exporter scales the emitters, docs/fidelity.md).
+
+Beside it, OUT.stderr.exr holds each pixel's standard error: the spread of the per-pass images
+divided by sqrt(number of passes). A path-traced reference is never noise-free; with this the
+comparison can tell its noise from a real difference (`subsurface compare` subtracts the noise
+floor from the squared error and gives region means with their uncertainty).
 """
 
 import argparse
@@ -22,7 +27,8 @@ def parse_args(argv):
     p.add_argument("scene", help="scene.xml written by `subsurface export-mitsuba`")
     p.add_argument("--out", required=True, help="output EXR (linear RGB)")
     p.add_argument("--spp", type=int, default=128, help="samples per pixel (default 128)")
-    p.add_argument("--pass-spp", type=int, default=16, help="samples per progress pass (default 16)")
+    p.add_argument("--pass-spp", type=int, default=16,
+                   help="samples per pass (default 16); the passes also give the standard error")
     p.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
     p.add_argument("--width", type=int, help="override the exported width")
     p.add_argument("--height", type=int, help="override the exported height")
@@ -33,11 +39,20 @@ def parse_args(argv):
     for k in ("spp", "pass_spp"):
         if getattr(a, k) < 1:
             p.error(f"--{k.replace('_', '-')}: must be at least 1")
+    if a.spp % a.pass_spp != 0:
+        p.error("--spp must be a multiple of --pass-spp (the passes must weigh the same for the standard error)")
+    if a.spp // a.pass_spp < 2 and a.spp > 1:
+        a.pass_spp = max(1, a.spp // 2)
     return a
 
 
+def stderr_path(out):
+    base = out[:-4] if out.lower().endswith(".exr") else out
+    return base + ".stderr.exr"
+
+
 def render(a):
-    """Returns (image as a list of rows of (r, g, b), seconds). Raises on any Mitsuba error."""
+    """Returns (mean image, standard-error image, seconds). Raises on any Mitsuba error."""
     import mitsuba as mi
 
     mi.set_variant(a.variant)
@@ -51,14 +66,17 @@ def render(a):
     scene = mi.load_file(a.scene, **params)
     passes = -(-a.spp // a.pass_spp)
     acc = None
+    acc2 = None
     done = 0
     start = time.time()
     for i in range(passes):
         n = min(a.pass_spp, a.spp - done)
         # Distinct, deterministic seeds per pass: the sum is one render of a.spp samples.
         img = mi.render(scene, spp=n, seed=a.seed * 1000003 + i)
-        # Plain Dr.Jit tensors (no numpy needed): sum of the passes weighted by their spp.
-        acc = img * n if acc is None else acc + img * n
+        # Plain Dr.Jit tensors (no numpy needed). Equal passes: the mean of the passes is the
+        # render of a.spp samples, and their spread estimates its noise.
+        acc = img if acc is None else acc + img
+        acc2 = img * img if acc2 is None else acc2 + img * img
         done += n
         if not a.quiet:
             el = time.time() - start
@@ -71,7 +89,16 @@ def render(a):
             )
     if not a.quiet:
         print(file=sys.stderr)
-    return acc / done, time.time() - start
+    import drjit as dr
+
+    k = passes
+    mean = acc / k
+    if k > 1:
+        var_pass = dr.maximum(acc2 / k - mean * mean, 0.0) * (k / (k - 1))
+        stderr = dr.sqrt(var_pass / k)
+    else:
+        stderr = mean * 0.0
+    return mean, stderr, time.time() - start
 
 
 def write_exr(path, img):
@@ -102,8 +129,9 @@ def main(argv=None):
         print(f"error: {a.scene}: no such file", file=sys.stderr)
         return 1
     try:
-        img, secs = render(a)
+        img, stderr, secs = render(a)
         write_exr(a.out, img)
+        write_exr(stderr_path(a.out), stderr)
     except Exception as e:  # Mitsuba raises RuntimeError with multi-line messages
         msg = " ".join(str(e).split())
         print(f"error: {a.scene}: {msg}", file=sys.stderr)

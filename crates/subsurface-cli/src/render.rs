@@ -129,9 +129,14 @@ pub struct SssArgs {
     /// Separable: per-channel falloff R,G,B (default: the first skin material's, 1,0.37,0.3).
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     pub falloff: Option<[f32; 3]>,
-    /// Let the blur cross depth edges (turns off the depth-difference correction).
+    /// Let the blur cross depth edges (turns off the depth-difference correction)
+    /// [default: the scene's render.follow_surface, true].
     #[arg(long)]
     pub no_follow_surface: bool,
+    /// Six-Gaussian: which of the five blurred Gaussians to accumulate, as five 0/1 values
+    /// (e.g. 1,1,0,1,1) [default: the scene's render.gaussians, all].
+    #[arg(long, value_name = "G1,..,G5", value_parser = parse_gaussians)]
+    pub gaussians: Option<[bool; 5]>,
     /// Texture-space SSS: size of each object's irradiance map in texels.
     #[arg(long, default_value_t = 1024, value_name = "N")]
     pub texture_size: u32,
@@ -156,6 +161,20 @@ impl From<SssArg> for SssMethod {
             SssArg::Texture => SssMethod::Texture,
         }
     }
+}
+
+/// Parses five comma-separated 0/1 values (the six-Gaussian switches).
+pub fn parse_gaussians(s: &str) -> Result<[bool; 5], String> {
+    let v: Vec<bool> = s
+        .split(',')
+        .map(|p| match p.trim() {
+            "1" => Ok(true),
+            "0" => Ok(false),
+            o => Err(format!("{o:?} is not 0 or 1")),
+        })
+        .collect::<Result<_, _>>()?;
+    v.try_into()
+        .map_err(|v: Vec<bool>| format!("expected five 0/1 values (got {})", v.len()))
 }
 
 /// Parses "r,g,b" into three finite floats.
@@ -187,8 +206,12 @@ impl SssArgs {
             }
         }
         let mut config = SssConfig::for_scene(scene);
-        config.method = self.sss.map_or(scene.desc.render.sss, SssMethod::from);
-        config.samples = self.samples.unwrap_or(scene.desc.render.samples);
+        if let Some(m) = self.sss {
+            config.method = m.into();
+        }
+        if let Some(n) = self.samples {
+            config.samples = n;
+        }
         config.texture_size = self.texture_size;
         if let Some(s) = self.strength {
             config.strength = s;
@@ -196,7 +219,12 @@ impl SssArgs {
         if let Some(f) = self.falloff {
             config.falloff = f;
         }
-        config.follow_surface = !self.no_follow_surface;
+        if self.no_follow_surface {
+            config.follow_surface = false;
+        }
+        if let Some(g) = self.gaussians {
+            config.gaussians_enabled = g;
+        }
         config.validate().map_err(|e| anyhow::anyhow!("--{e}"))?;
         Ok(config)
     }
@@ -216,6 +244,12 @@ pub enum ViewArg {
     DiffuseBefore,
     /// Specular radiance only
     Specular,
+    /// Thickness the transmittance sees, in profile mm (white 0, yellow, red, black 8 mm and
+    /// beyond; grey where no shadowed light reaches)
+    Thickness,
+    /// The irradiance that is blurred: the first skin object's UV-space map with --sss
+    /// texture, else the lit image before the screen-space blur
+    Irradiance,
 }
 
 impl From<ViewArg> for DebugView {
@@ -227,6 +261,8 @@ impl From<ViewArg> for DebugView {
             ViewArg::Diffuse => DebugView::Diffuse,
             ViewArg::DiffuseBefore => DebugView::DiffuseBeforeSss,
             ViewArg::Specular => DebugView::Specular,
+            ViewArg::Thickness => DebugView::Thickness,
+            ViewArg::Irradiance => DebugView::Irradiance,
         }
     }
 }

@@ -173,6 +173,8 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
         "--exposure",
         "0.5",
         "--no-follow-surface",
+        "--gaussians",
+        "1,0,1,1,1",
     ];
     let mut args = settings.to_vec();
     args.extend([
@@ -188,16 +190,13 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
     }
     let saved = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
     assert!(saved.contains("sss = \"gaussian6\""), "{saved}");
-    // The file names the render flags that reproduce the view; render with exactly those.
-    let flags: Vec<&str> = saved
-        .lines()
-        .find_map(|l| l.strip_prefix("# render-flags:"))
-        .expect("a # render-flags: line")
-        .split_whitespace()
-        .collect();
-    assert!(flags.contains(&"--no-follow-surface"), "{flags:?}");
-    let mut r = vec!["saved.toml", "--out", "render.png"];
-    r.extend(&flags);
+    // The saved scene is a plain scene file: `render` reproduces the view without flags.
+    assert!(saved.contains("follow_surface = false"), "{saved}");
+    assert!(
+        saved.contains("gaussians = [true, false, true, true, true]"),
+        "{saved}"
+    );
+    let r = vec!["saved.toml", "--out", "render.png"];
     let out = render(&r, &dir);
     assert!(out.status.success(), "{}", text(&out));
     let e = flip_mean(&dir.join("render.png"), &dir.join("view.png"), None);
@@ -325,4 +324,34 @@ fn no_display_is_a_one_line_error() {
     assert!(!out.status.success());
     assert!(err.contains("error: cannot open a window"), "{err}");
     assert!(!err.contains("panicked") && !err.contains(".rs:"), "{err}");
+}
+
+/// The debug views added for tuning transmittance and texture space: the window shows what
+/// `render --view` writes.
+#[test]
+fn debug_views_match_render() {
+    let dir = tempdir("views");
+    if !gpu_available(&dir) {
+        return;
+    }
+    for (view_name, extra) in [
+        ("thickness", &[][..]),
+        ("irradiance", &["--sss", "texture"][..]),
+    ] {
+        let shot = format!("view-{view_name}.png");
+        let mut args = vec!["--view", view_name, "--frames", "3", "--screenshot", &shot];
+        args.extend(extra);
+        if view(&args, &dir).is_none() {
+            return;
+        }
+        let png = format!("render-{view_name}.png");
+        let mut r = vec![
+            "--width", W, "--height", H, "--view", view_name, "--out", &png,
+        ];
+        r.extend(extra);
+        let out = render(&r, &dir);
+        assert!(out.status.success(), "{}", text(&out));
+        let e = flip_mean(&dir.join(&png), &dir.join(&shot), None);
+        assert!(e <= TOLERANCE, "{view_name}: mean FLIP {e} > {TOLERANCE}");
+    }
 }

@@ -164,6 +164,14 @@ fn shadow_signature(lights: &gpu_scene::LightSetup) -> Vec<(usize, u32)> {
     v
 }
 
+fn thickness_flag(view: DebugView) -> f32 {
+    if view == DebugView::Thickness {
+        1.0
+    } else {
+        0.0
+    }
+}
+
 fn output_texture(ctx: &GpuContext, w: u32, h: u32) -> wgpu::Texture {
     ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("output"),
@@ -210,7 +218,8 @@ impl Renderer {
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout)?;
-        let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        let mut lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        lights.uniform.transmittance[3] = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
@@ -322,7 +331,8 @@ impl Renderer {
                 queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
             }
         }
-        let lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        let mut lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        lights.uniform.transmittance[3] = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
         let settings = texture_settings(options);
@@ -458,9 +468,7 @@ impl Renderer {
             self.far,
             p,
         );
-        if self.options.view != DebugView::DiffuseBeforeSss
-            && self.options.sss.method != SssMethod::None
-        {
+        if self.options.view.blurs() && self.options.sss.method != SssMethod::None {
             self.sss.encode(encoder, p);
         }
         if let Some(copy) = &self.copy {
@@ -468,22 +476,46 @@ impl Renderer {
         }
     }
 
+    /// The UV-space irradiance map that `DebugView::Irradiance` shows: the first skin
+    /// object's, with texture-space diffusion; None otherwise (the view then shows the lit
+    /// image before the screen-space blur).
+    fn irradiance_map(&self) -> Option<&wgpu::Texture> {
+        if self.options.view != DebugView::Irradiance
+            || self.options.sss.method != SssMethod::Texture
+        {
+            return None;
+        }
+        (0..self.objects.len()).find_map(|i| self.texture_space.object_maps(i).map(|m| m.0))
+    }
+
+    /// Writes the tone-map parameters of `pass` and returns the bind group to draw with:
+    /// `default` or, for the irradiance view, one that reads the UV-space map.
+    fn prepare_tonemap(&self, pass: &ToneMapPass, default: &wgpu::BindGroup) -> wgpu::BindGroup {
+        let o = &self.options;
+        let Some(map) = self.irradiance_map() else {
+            pass.set_params(&self.ctx.queue, o.exposure_ev, o.view, self.far);
+            return default.clone();
+        };
+        pass.set_params_with(&self.ctx.queue, o.exposure_ev, 0.0, self.far, true);
+        // A debug view: one bind group per frame is cheap next to the texture-space passes.
+        let views = target_views(&self.targets);
+        let map_view = map.create_view(&Default::default());
+        pass.bind(
+            &self.ctx.device,
+            &ToneMapInputs {
+                diffuse: &map_view,
+                ..tonemap_inputs(&views)
+            },
+        )
+    }
+
     /// Records one whole frame into `encoder`, ending with the tone-mapped `output` texture.
     pub fn encode_frame(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.tonemap.set_params(
-            &self.ctx.queue,
-            self.options.exposure_ev,
-            self.options.view,
-            self.far,
-        );
+        let bind_group = self.prepare_tonemap(&self.tonemap, &self.tonemap_bind_group);
         self.encode_scene(encoder);
         let out = self.output.create_view(&Default::default());
-        self.tonemap.encode(
-            encoder,
-            &self.tonemap_bind_group,
-            &out,
-            Some(&self.profiler),
-        );
+        self.tonemap
+            .encode(encoder, &bind_group, &out, Some(&self.profiler));
     }
 
     /// Records a whole frame tone-mapped into `view` (e.g. a window's swapchain texture of
@@ -510,14 +542,9 @@ impl Renderer {
             .iter()
             .find(|(f, _, _)| *f == format)
             .expect("inserted above");
-        pass.set_params(
-            &self.ctx.queue,
-            self.options.exposure_ev,
-            self.options.view,
-            self.far,
-        );
+        let bg = self.prepare_tonemap(pass, bg);
         self.encode_scene(encoder);
-        pass.encode_scissored(encoder, bg, view, scissor, Some(&self.profiler));
+        pass.encode_scissored(encoder, &bg, view, scissor, Some(&self.profiler));
     }
 
     /// After `encode_to_view` or `encode_frame`: resolves this frame's timestamp queries into

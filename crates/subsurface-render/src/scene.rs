@@ -174,6 +174,12 @@ pub struct RenderDesc {
     pub transmittance: crate::passes::transmittance::TransmittanceMethod,
     /// Width in texels of the shadow-map area averaged for thickness, odd, 1..=15.
     pub thickness_filter: u32,
+    /// Screen-space SSS: weaken taps across depth differences (the blur follows the surface
+    /// instead of crossing silhouettes and depth edges).
+    pub follow_surface: bool,
+    /// Six-Gaussian SSS: which of the five blurred Gaussians (variances 2..6 of the profile)
+    /// are accumulated; switching one off shows its share of the profile.
+    pub gaussians: [bool; 5],
 }
 
 impl Default for RenderDesc {
@@ -189,6 +195,8 @@ impl Default for RenderDesc {
             samples: 17,
             transmittance: crate::passes::transmittance::TransmittanceMethod::Paper,
             thickness_filter: 3,
+            follow_surface: true,
+            gaussians: [true; 5],
         }
     }
 }

@@ -454,3 +454,70 @@ fn tsm_transmits_through_a_backlit_sphere() {
     eprintln!("front-lit centre: tsm {:?}, off {:?}", tsm[c], off[c]);
     assert!((tsm[c][0] - off[c][0]).abs() <= 1e-3 * off[c][0].max(1e-3));
 }
+
+/// The irradiance debug view with texture-space diffusion shows the UV-space irradiance map
+/// itself, as the largest centred square (black bars beside it), texel for texel where the
+/// map is lit.
+#[test]
+fn irradiance_view_shows_the_uv_map() {
+    let Some(ctx) = context() else { return };
+    let scene = common::scene(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 0.03]
+        target = [0.0, 0.0, 0.0]
+        fov_y_deg = 20.0
+        near = 0.005
+        far = 1.0
+        [render]
+        ambient = [0.0, 0.0, 0.0]
+        [[lights]]
+        kind = "directional"
+        position = [1.0, 0.5, 1.0]
+        target = [0.0, 0.0, 0.0]
+        intensity = 1.0
+        shadow_map_size = 512
+        [[objects]]
+        mesh = { shape = "sphere", radius = 0.002, segments = 32 }
+        mm_per_unit = 1000.0
+        [objects.material]
+        albedo = [1.0, 1.0, 1.0]
+        specular = 0.0
+        "#,
+    );
+    let (w, h, size) = (128u32, 64u32, 64u32);
+    let mut opts = RenderOptions::from_scene(&scene);
+    opts.width = w;
+    opts.height = h;
+    opts.view = subsurface_render::DebugView::Irradiance;
+    opts.sss = SssConfig {
+        method: SssMethod::Texture,
+        texture_size: size,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
+    let image = r.render().unwrap().image;
+    let map = read4(&ctx, r.texture_space_maps(0).unwrap().0);
+    let (mut lit, mut agree, mut n) = (0, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let p = image.get_pixel(x, y).0;
+            let bright = p[0] as u32 + p[1] as u32 + p[2] as u32;
+            if !(32..96).contains(&x) {
+                assert_eq!(bright, 0, "letterbox bar at ({x}, {y}): {p:?}");
+                continue;
+            }
+            let t = map[(y * size + (x - 32)) as usize];
+            // Texels too dim to survive 8 bits are left out.
+            if t[0] > 0.0 && t[0] < 0.02 {
+                continue;
+            }
+            let map_lit = t[0] > 0.0;
+            lit += map_lit as u32;
+            agree += ((bright > 0) == map_lit) as u32;
+            n += 1;
+        }
+    }
+    assert!(lit > n / 8, "too little of the map is lit: {lit} of {n}");
+    assert_eq!(agree, n, "image and map disagree on {} texels", n - agree);
+}

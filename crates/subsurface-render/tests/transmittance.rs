@@ -7,7 +7,7 @@ use common::{context, scene};
 use subsurface_profile::SumOfGaussians;
 use subsurface_render::passes::sss::{SssConfig, SssMethod};
 use subsurface_render::passes::transmittance::TransmittanceMethod;
-use subsurface_render::{RenderOptions, Renderer, Scene};
+use subsurface_render::{DebugView, RenderOptions, Renderer, Scene};
 
 const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
 
@@ -293,5 +293,124 @@ fn transmitted_colour_follows_the_material_profile() {
     assert!(
         rg(marble) < 2.0,
         "marble should transmit nearly white light: {marble:?}"
+    );
+}
+
+/// The thickness debug view writes, per pixel, the thickness the transmittance uses; on the
+/// wedge it is the wedge's own thickness at that x (minus the normal shrink), and where no
+/// light has a shadow map it is "unknown" (< 0), shown grey.
+#[test]
+fn thickness_view_shows_the_wedge_thickness() {
+    let Some(ctx) = context() else { return };
+    let (length, max_t) = (0.08f32, 0.008f32);
+    let wedge = format!(
+        "{{ shape = \"wedge\", length = {length}, height = 0.04, max_thickness = {max_t} }}"
+    );
+    let (w, h) = (256u32, 160u32);
+    let render = |scene: &Scene, view: DebugView| {
+        let mut opts = RenderOptions::from_scene(scene);
+        opts.width = w;
+        opts.height = h;
+        opts.view = view;
+        let mut r = Renderer::new(&ctx, scene, opts).unwrap();
+        let frame = r.render().unwrap();
+        (
+            r.read_diffuse().unwrap(),
+            r.read_linear_depth().unwrap(),
+            frame.image,
+        )
+    };
+    let (thick, depth, image) = render(&backlit(&wedge, 2048), DebugView::Thickness);
+    let focal = 0.5 * h as f32 / (10f32).to_radians().tan();
+    let y = h / 2;
+    let mut n = 0;
+    let mut worst = 0.0f32;
+    let mut last = -1.0f32;
+    for x in 0..w {
+        let i = (y * w + x) as usize;
+        if depth[i] > 1.0 {
+            continue;
+        }
+        let world_x = (x as f32 + 0.5 - w as f32 * 0.5) * depth[i] / focal;
+        let want = (world_x + length * 0.5) / length * max_t * 1000.0 - SHRINK * 1000.0;
+        if !(0.4..=7.6).contains(&want) {
+            continue;
+        }
+        let got = thick[i][0];
+        // Shadow-map texels (2048 over the light's frustum) and the 3x3 thickness filter.
+        assert!(
+            (got - want).abs() < 0.1 + 0.03 * want,
+            "x = {x}: thickness view {got} mm, wedge {want} mm"
+        );
+        assert!(
+            got >= last - 0.05,
+            "not increasing at x = {x}: {last} -> {got}"
+        );
+        last = got;
+        worst = worst.max((got - want).abs());
+        n += 1;
+    }
+    assert!(n > 80, "too few wedge pixels: {n}");
+    eprintln!("thickness view on the wedge: {n} pixels, worst error {worst:.3} mm");
+    // The ramp: thin is brighter than thick in the image.
+    let lum = |x: u32| {
+        let p = image.get_pixel(x, y).0;
+        p[0] as u32 + p[1] as u32 + p[2] as u32
+    };
+    let xs: Vec<u32> = (0..w)
+        .filter(|&x| depth[(y * w + x) as usize] < 1.0)
+        .collect();
+    let (first, last_x) = (xs[xs.len() / 8], xs[xs.len() * 7 / 8]);
+    assert!(
+        lum(first) > lum(last_x) + 60,
+        "thin end {:?} not brighter than thick end {:?}",
+        image.get_pixel(first, y),
+        image.get_pixel(last_x, y)
+    );
+    // Without shadow maps there is no thickness: every object pixel is "unknown".
+    let (thick, depth, _) = render(&backlit(&wedge, 0), DebugView::Thickness);
+    for (t, z) in thick.iter().zip(&depth) {
+        if *z < 1.0 {
+            assert!(t[0] < 0.0, "thickness {t:?} without a shadow map");
+        }
+    }
+}
+
+/// Jimenez et al. 2010 add transmitted light only where the surface turns away from the
+/// light: lit from the camera's side, a thin slab looks the same with and without it.
+#[test]
+fn no_transmittance_where_the_surface_faces_the_light() {
+    if context().is_none() {
+        return;
+    }
+    let slab = "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }";
+    let front = |s: Scene| {
+        let mut desc = s.desc.clone();
+        desc.lights[0].position = [0.0, 0.0, 1.0];
+        Scene::from_desc(desc, std::path::Path::new("."), "front").unwrap()
+    };
+    let lit = front(backlit(slab, 1024));
+    let (with, depth) = render_diffuse(&lit, 64, 64, TransmittanceMethod::Paper);
+    let (without, _) = render_diffuse(&lit, 64, 64, TransmittanceMethod::Off);
+    let mut n = 0;
+    for ((a, b), z) in with.iter().zip(&without).zip(&depth) {
+        if *z < 1.0 {
+            assert!(b[0] > 0.5, "front face not lit: {b:?}");
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-3,
+                    "transmittance added {a:?} vs {b:?}"
+                );
+            }
+            n += 1;
+        }
+    }
+    assert!(n > 500, "slab covers {n} pixels");
+    // The same slab lit from behind does transmit (1 mm of skin passes most red light).
+    let (back, _) = render_diffuse(&backlit(slab, 1024), 64, 64, TransmittanceMethod::Paper);
+    assert!(
+        back[32 * 64 + 32][0] > 0.3,
+        "backlit: {:?}",
+        back[32 * 64 + 32]
     );
 }

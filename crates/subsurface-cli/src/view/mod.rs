@@ -27,8 +27,7 @@ use state::{ViewerState, transmittance_from_arg};
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
-    /// Scene file (TOML). Without it, the embedded default scene. A `# render-flags:` comment
-    /// in it (as the viewer writes) sets the SSS and transmittance methods.
+    /// Scene file (TOML; the viewer's saved scenes too). Without it, the embedded default scene.
     pub scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model; the camera is re-aimed to frame it.
     #[arg(long, value_name = "FILE.glb")]
@@ -45,7 +44,7 @@ pub struct ViewArgs {
     /// Debug view to start with.
     #[arg(long, value_enum)]
     pub view: Option<ViewArg>,
-    /// SSS method to start with (default: the scene's `# render-flags:`, else separable).
+    /// SSS method to start with (default: the scene's render.sss, separable).
     #[arg(long, value_enum)]
     pub sss: Option<SssArg>,
     /// Separable: kernel taps (odd, 3..=63).
@@ -54,6 +53,9 @@ pub struct ViewArgs {
     /// Let the blur cross depth edges.
     #[arg(long)]
     pub no_follow_surface: bool,
+    /// Six-Gaussian: which of the five blurred Gaussians are on, five 0/1 values.
+    #[arg(long, value_name = "G1,..,G5", value_parser = crate::render::parse_gaussians)]
+    pub gaussians: Option<[bool; 5]>,
     /// Transmittance method to start with (default: the scene's, else paper).
     #[arg(long, value_enum)]
     pub transmittance: Option<TransmittanceArg>,
@@ -115,6 +117,9 @@ fn initial_state(args: &ViewArgs) -> Result<(ViewerState, Scene)> {
     }
     if args.no_follow_surface {
         a.follow_surface = false;
+    }
+    if let Some(g) = args.gaussians {
+        a.gaussians = g;
     }
     if let Some(t) = args.transmittance {
         a.transmittance = transmittance_from_arg(t);

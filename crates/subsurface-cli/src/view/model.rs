@@ -338,10 +338,9 @@ impl Model {
     pub fn save_scene(&mut self, path: &Path) {
         match self.state.save(path) {
             Ok(()) => self.info(format!(
-                "saved {}; render it with: subsurface render {} {}",
+                "saved {}; render it with: {}",
                 path.display(),
-                path.display(),
-                self.state.render_flags()
+                ViewerState::render_command(path)
             )),
             Err(e) => self.error(format!("{e:#}")),
         }

@@ -27,15 +27,19 @@ pub struct Viewport {
     pub dt: f32,
 }
 
-/// The renderer's debug views. Thickness and irradiance-map views do not exist in the
-/// renderer yet.
-const VIEWS: [(DebugView, &str); 6] = [
+/// The renderer's debug views.
+const VIEWS: [(DebugView, &str); 8] = [
     (DebugView::Final, "final"),
     (DebugView::Mask, "SSS mask"),
     (DebugView::Depth, "depth"),
     (DebugView::DiffuseBeforeSss, "diffuse before SSS"),
     (DebugView::Diffuse, "diffuse after SSS"),
     (DebugView::Specular, "specular"),
+    (DebugView::Thickness, "thickness (transmittance)"),
+    (
+        DebugView::Irradiance,
+        "irradiance (UV map with texture SSS)",
+    ),
 ];
 const SHADOW_SIZES: [u32; 6] = [256, 512, 1024, 2048, 4096, 8192];
 
@@ -687,5 +691,211 @@ fn view_input(ui: &mut Ui, rect: egui::Rect, m: &mut Model, vp: &Viewport) {
             m.camera.fly.step(input, vp.dt.min(0.1), speed);
             m.camera_moved();
         }
+    }
+}
+
+/// Mouse and keyboard through egui, as the window delivers them: raw input events into a
+/// headless `egui::Context`, the same `show` the viewer runs each frame, and the camera it
+/// leaves behind.
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::state::ViewerState;
+    use egui::{Event, Modifiers, Pos2, RawInput, Rect, Vec2, pos2, vec2};
+    use glam::Vec3;
+    use std::path::PathBuf;
+    use subsurface_render::Scene;
+    use subsurface_render::scene::DEFAULT_SCENE_TOML;
+
+    const W: f32 = 800.0;
+    const H: f32 = 600.0;
+
+    struct Harness {
+        ctx: egui::Context,
+        model: Model,
+        time: f64,
+    }
+
+    impl Harness {
+        fn new() -> Self {
+            let state =
+                ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default")
+                    .unwrap();
+            let mut model = Model::new(state, Scene::default_scene(), None);
+            // The whole window is the 3D view, as with the panel hidden (F1).
+            model.ui.show_panel = false;
+            Self {
+                ctx: egui::Context::default(),
+                model,
+                time: 0.0,
+            }
+        }
+
+        /// One frame with these events (and keys held, for fly), 1/60 s after the last.
+        fn frame(&mut self, events: Vec<Event>) {
+            self.time += 1.0 / 60.0;
+            let raw = RawInput {
+                screen_rect: Some(Rect::from_min_size(Pos2::ZERO, vec2(W, H))),
+                time: Some(self.time),
+                predicted_dt: 1.0 / 60.0,
+                events,
+                ..Default::default()
+            };
+            let vp = Viewport {
+                width: W as u32,
+                height: H as u32,
+                pixels_per_point: 1.0,
+                dt: 1.0 / 60.0,
+            };
+            let model = &mut self.model;
+            let mut out = self.ctx.run_ui(raw, |ui| {
+                show(ui, model, &vp);
+            });
+            // No painter here: egui insists that dropped texture updates are acknowledged.
+            out.textures_delta.clear();
+        }
+
+        /// Press `button` at `from`, move in steps of at most 10 px to `to`, release.
+        fn drag(&mut self, button: PointerButton, from: Pos2, to: Pos2, modifiers: Modifiers) {
+            // egui-winit reports Shift and co. as ModifiersChanged events.
+            self.frame(vec![
+                Event::ModifiersChanged(modifiers),
+                Event::PointerMoved(from),
+            ]);
+            self.frame(vec![Event::PointerButton {
+                pos: from,
+                button,
+                pressed: true,
+                modifiers,
+            }]);
+            let steps = ((to - from).length() / 10.0).ceil().max(1.0) as usize;
+            for i in 1..=steps {
+                let p = from + (to - from) * (i as f32 / steps as f32);
+                self.frame(vec![Event::PointerMoved(p)]);
+            }
+            self.frame(vec![Event::PointerButton {
+                pos: to,
+                button,
+                pressed: false,
+                modifiers,
+            }]);
+            self.frame(vec![Event::ModifiersChanged(Modifiers::NONE)]);
+        }
+
+        fn eye(&self) -> (Vec3, Vec3) {
+            let c = &self.model.state.desc.camera;
+            (Vec3::from(c.position), Vec3::from(c.target))
+        }
+    }
+
+    fn angle_deg(a: Vec3, b: Vec3) -> f32 {
+        a.normalize()
+            .dot(b.normalize())
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+
+    #[test]
+    fn left_drag_of_half_the_height_orbits_a_quarter_turn() {
+        let mut h = Harness::new();
+        let (eye0, target0) = h.eye();
+        h.drag(
+            PointerButton::Primary,
+            pos2(200.0, 300.0),
+            pos2(200.0 + H / 2.0, 300.0),
+            Modifiers::NONE,
+        );
+        let (eye1, target1) = h.eye();
+        assert!((target1 - target0).length() < 1e-5, "target moved");
+        let a = angle_deg(eye0 - target0, eye1 - target1);
+        assert!((a - 90.0).abs() < 0.5, "orbited {a} degrees, want 90");
+        assert!(
+            ((eye1 - target1).length() - (eye0 - target0).length()).abs() < 1e-5,
+            "distance changed"
+        );
+        assert!(h.model.dirty.update, "no update requested");
+    }
+
+    #[test]
+    fn middle_drag_pans_and_wheel_zooms() {
+        let mut h = Harness::new();
+        let (eye0, target0) = h.eye();
+        h.drag(
+            PointerButton::Middle,
+            pos2(400.0, 300.0),
+            pos2(460.0, 300.0),
+            Modifiers::NONE,
+        );
+        let (eye1, target1) = h.eye();
+        // Pan: eye and target move together, sideways, keeping the view direction.
+        assert!((target1 - target0).length() > 1e-4, "no pan");
+        assert!(((eye1 - target1) - (eye0 - target0)).length() < 1e-5);
+        assert!((target1 - target0).dot(eye0 - target0).abs() < 1e-6);
+        // One wheel notch towards the screen moves the eye closer, not the target.
+        let d0 = (eye1 - target1).length();
+        h.frame(vec![Event::PointerMoved(pos2(400.0, 300.0))]);
+        h.frame(vec![Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: Vec2::new(0.0, 50.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: Modifiers::NONE,
+        }]);
+        for _ in 0..30 {
+            h.frame(vec![]); // egui smooths the wheel over a few frames
+        }
+        let (eye2, target2) = h.eye();
+        assert!((target2 - target1).length() < 1e-5);
+        let d2 = (eye2 - target2).length();
+        assert!(d2 < 0.99 * d0, "wheel did not zoom in: {d0} -> {d2}");
+    }
+
+    #[test]
+    fn shift_drag_moves_the_selected_light_not_the_camera() {
+        let mut h = Harness::new();
+        let (eye0, _) = h.eye();
+        let light0 = Vec3::from(h.model.state.desc.lights[0].position);
+        h.drag(
+            PointerButton::Primary,
+            pos2(300.0, 300.0),
+            pos2(400.0, 300.0),
+            Modifiers::SHIFT,
+        );
+        let light1 = Vec3::from(h.model.state.desc.lights[0].position);
+        assert!((h.eye().0 - eye0).length() < 1e-6, "camera moved");
+        assert!((light1 - light0).length() > 1e-3, "light did not move");
+    }
+
+    #[test]
+    fn fly_mode_w_moves_forward() {
+        let mut h = Harness::new();
+        h.model.camera.set_mode(Mode::Fly);
+        let (eye0, target0) = h.eye();
+        let forward = (target0 - eye0).normalize();
+        h.frame(vec![Event::Key {
+            key: egui::Key::W,
+            physical_key: None,
+            pressed: true,
+            repeat: false,
+            modifiers: Modifiers::NONE,
+        }]);
+        for _ in 0..10 {
+            h.frame(vec![]);
+        }
+        h.frame(vec![Event::Key {
+            key: egui::Key::W,
+            physical_key: None,
+            pressed: false,
+            repeat: false,
+            modifiers: Modifiers::NONE,
+        }]);
+        let (eye1, _) = h.eye();
+        let moved = eye1 - eye0;
+        assert!(moved.dot(forward) > 0.0, "did not move forward: {moved}");
+        assert!(
+            (moved - forward * moved.dot(forward)).length() < 1e-4 * moved.length().max(1e-3),
+            "moved sideways: {moved}"
+        );
     }
 }

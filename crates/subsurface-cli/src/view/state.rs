@@ -3,16 +3,14 @@
 //! render` reproduces.
 //!
 //! Material, camera, light, exposure and method edits go into the scene description itself
-//! (`[render] sss, samples, transmittance, thickness_filter`), so a saved scene carries them.
-//! The two settings the scene format has no key for (follow surface, the six-Gaussian
-//! switches) go into comment lines: `# render-flags:` holds the exact flags to give
-//! `subsurface render` (repeating the `[render]` methods for clarity) and `# viewer-flags:`
-//! what only the viewer knows; the viewer reads both back when it opens the file.
+//! (`[render] sss, samples, follow_surface, gaussians, transmittance, thickness_filter`), so
+//! a saved scene is a plain scene file: `subsurface render FILE` reproduces the view with no
+//! flags.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use clap::{Parser, ValueEnum};
+use clap::ValueEnum;
 use subsurface_render::passes::sss::{SssConfig, SssMethod};
 use subsurface_render::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
 use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
@@ -66,28 +64,6 @@ pub struct ViewerState {
     pub split: f32,
 }
 
-/// The flags of a `# render-flags:` comment: the `render` flags the scene format lacks.
-#[derive(Parser, Debug)]
-#[command(no_binary_name = true)]
-struct HeaderFlags {
-    #[arg(long, value_enum)]
-    sss: Option<SssArg>,
-    #[arg(long)]
-    samples: Option<u32>,
-    #[arg(long)]
-    no_follow_surface: bool,
-    #[arg(long, value_enum)]
-    transmittance: Option<TransmittanceArg>,
-    #[arg(long)]
-    thickness_filter: Option<u32>,
-    /// Viewer only (no `render` flag): 0/1 per blurred Gaussian of the six-Gaussian method.
-    #[arg(long, value_delimiter = ',')]
-    gaussians: Vec<u8>,
-}
-
-const FLAGS_PREFIX: &str = "# render-flags:";
-const VIEWER_FLAGS_PREFIX: &str = "# viewer-flags:";
-
 /// The SSS methods `subsurface render` offers, in its order.
 pub fn sss_methods() -> Vec<SssMethod> {
     SssArg::value_variants()
@@ -128,6 +104,8 @@ impl ViewerState {
         let a = Side {
             sss: r.sss,
             samples: r.samples,
+            follow_surface: r.follow_surface,
+            gaussians: r.gaussians,
             transmittance: r.transmittance,
             thickness_filter: r.thickness_filter,
             ..Side::default()
@@ -145,69 +123,22 @@ impl ViewerState {
         }
     }
 
-    /// Parses a scene file's text, including a `# render-flags:` comment if it has one.
+    /// Parses a scene file's text.
     pub fn from_toml_str(text: &str, base_dir: PathBuf, name_for_errors: &str) -> Result<Self> {
         let desc = SceneDesc::from_toml_str(text, name_for_errors)?;
-        let mut state = Self::new(desc, base_dir);
-        let mut words: Vec<String> = Vec::new();
-        for line in text.lines() {
-            for prefix in [FLAGS_PREFIX, VIEWER_FLAGS_PREFIX] {
-                if let Some(rest) = line.strip_prefix(prefix) {
-                    words.extend(rest.split_whitespace().map(str::to_string));
-                }
-            }
-        }
-        let flags = HeaderFlags::try_parse_from(&words).map_err(|e| {
-            let msg = e.to_string();
-            let first = msg
-                .lines()
-                .next()
-                .unwrap_or("")
-                .trim_start_matches("error: ");
-            anyhow::anyhow!("{name_for_errors}: {FLAGS_PREFIX} comment: {first}")
-        })?;
-        // The methods are scene keys ([render]); the header repeats them for `render`, but the
-        // scene wins if the two disagree (a hand-edited file).
-        let _ = (
-            flags.sss,
-            flags.samples,
-            flags.transmittance,
-            flags.thickness_filter,
-        );
-        let a = &mut state.a;
-        a.follow_surface = !flags.no_follow_surface;
-        if !flags.gaussians.is_empty() {
-            anyhow::ensure!(
-                flags.gaussians.len() == 5 && flags.gaussians.iter().all(|&g| g <= 1),
-                "{name_for_errors}: {VIEWER_FLAGS_PREFIX} --gaussians: expected five 0/1 values"
-            );
-            for (g, &v) in a.gaussians.iter_mut().zip(&flags.gaussians) {
-                *g = v == 1;
-            }
-        }
+        let state = Self::new(desc, base_dir);
         state
             .options(&state.a)
-            .map_err(|e| anyhow::anyhow!("{name_for_errors}: {FLAGS_PREFIX} comment: {e:#}"))?;
+            .map_err(|e| anyhow::anyhow!("{name_for_errors}: {e:#}"))?;
         Ok(state)
     }
 
-    /// The `subsurface render` flags that reproduce side `a` (the rest is in the scene).
-    pub fn render_flags(&self) -> String {
-        let a = &self.a;
-        let mut s = format!(
-            "--sss {} --samples {} --transmittance {} --thickness-filter {}",
-            a.sss.name(),
-            a.samples,
-            transmittance_name(a.transmittance),
-            a.thickness_filter
-        );
-        if !a.follow_surface {
-            s.push_str(" --no-follow-surface");
-        }
-        s
+    /// The command that renders a scene saved to `path` exactly as side `a` shows it.
+    pub fn render_command(path: &Path) -> String {
+        format!("subsurface render {}", path.display())
     }
 
-    /// Scene file text: a header with the render flags, then the scene. Relative asset
+    /// Scene file text: a one-line header, then the scene. Relative asset
     /// paths are kept when the file goes to the directory they are relative to, and made
     /// absolute otherwise, so the saved scene loads from wherever it is written.
     pub fn to_toml(&self, dest: &Path) -> String {
@@ -225,26 +156,8 @@ impl ViewerState {
             }
             .desc_with_absolute_paths()
         };
-        let mut header = String::from(
-            "# Scene saved by `subsurface view`. `subsurface render FILE` plus these flags (they\n\
-             # repeat [render] and add what the scene format has no key for) reproduces the view:\n",
-        );
-        header.push_str(&format!("{FLAGS_PREFIX} {}\n", self.render_flags()));
-        if self.a.gaussians != [true; 5] {
-            let g: Vec<&str> = self
-                .a
-                .gaussians
-                .iter()
-                .map(|&g| if g { "1" } else { "0" })
-                .collect();
-            header.push_str(
-                "# Gaussians switched off in the viewer (`render` has no flag for this, it uses all):\n",
-            );
-            header.push_str(&format!(
-                "{VIEWER_FLAGS_PREFIX} --gaussians {}\n",
-                g.join(",")
-            ));
-        }
+        let header =
+            "# Scene saved by `subsurface view`; `subsurface render FILE` reproduces the view.\n";
         format!("{header}\n{}", desc.to_toml_string())
     }
 
@@ -256,6 +169,8 @@ impl ViewerState {
         r.samples = self.a.samples;
         r.transmittance = self.a.transmittance;
         r.thickness_filter = self.a.thickness_filter;
+        r.follow_surface = self.a.follow_surface;
+        r.gaussians = self.a.gaussians;
         d
     }
 
@@ -451,14 +366,10 @@ mod tests {
     }
 
     #[test]
-    fn render_flags_parse_as_render_would() {
+    fn saved_scene_renders_the_same_options_without_flags() {
         let s = edited();
         let text = s.to_toml(Path::new("x.toml"));
-        let flags = text
-            .lines()
-            .find_map(|l| l.strip_prefix(FLAGS_PREFIX))
-            .unwrap();
-        // The same words through `render`'s own argument parser give the same options.
+        // `render`'s own argument parser with no flags at all, on the saved text.
         #[derive(clap::Parser)]
         struct R {
             #[command(flatten)]
@@ -466,19 +377,22 @@ mod tests {
             #[command(flatten)]
             t: crate::render::TransmittanceArgs,
         }
-        let words = std::iter::once("render").chain(flags.split_whitespace());
-        let r = R::try_parse_from(words).unwrap();
+        let r = <R as clap::Parser>::try_parse_from(["render"]).unwrap();
         let mut scene = subsurface_render::Scene::from_desc(
             SceneDesc::from_toml_str(&text, "x.toml").unwrap(),
             Path::new("."),
             "x.toml",
         )
         .unwrap();
-        let mut want = s.options(&s.a).unwrap();
-        // `render` has no flag for the Gaussians; it renders with all of them.
-        want.sss.gaussians_enabled = [true; 5];
+        let want = s.options(&s.a).unwrap();
         assert_eq!(r.sss.apply(&mut scene).unwrap(), want.sss);
         assert_eq!(r.t.config(&scene).unwrap(), want.transmittance);
+        // The switches that used to live only in the viewer are scene keys now.
+        assert!(text.contains("follow_surface = false"), "{text}");
+        assert!(
+            text.contains("gaussians = [true, false, true, true, false]"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -494,12 +408,12 @@ mod tests {
     }
 
     #[test]
-    fn bad_header_flags_are_one_line_errors() {
-        let text = format!("{FLAGS_PREFIX} --samples x\n{DEFAULT_SCENE_TOML}");
+    fn bad_scene_keys_are_one_line_errors() {
+        let text = DEFAULT_SCENE_TOML.replace("[render]", "[render]\ngaussians = [true, 1]");
         let e = ViewerState::from_toml_str(&text, PathBuf::from("."), "s.toml").unwrap_err();
         let msg = format!("{e:#}");
         assert!(
-            msg.starts_with("s.toml: ") && msg.contains("samples"),
+            msg.starts_with("s.toml") && msg.contains("gaussians"),
             "{msg}"
         );
         assert!(!msg.contains('\n'), "{msg}");

@@ -251,6 +251,10 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         // are blurred together (000_*).
         out.diffuse = vec4<f32>(albedo * (s.irradiance + lights.ambient.rgb + s.transmitted + s.tsm), 1.0);
     }
+    if (lights.transmittance.w > 0.5) {
+        // Thickness debug view (tonemap.wgsl reads it back from diffuse.r).
+        out.diffuse = vec4<f32>(min_thickness_mm(in.world, n_vertex), 0.0, 0.0, 1.0);
+    }
     out.specular = vec4<f32>(s.specular, 1.0);
     out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
     out.sss = vec2<f32>(object.params.y, object.params.z);

@@ -108,10 +108,17 @@ impl Default for SssConfig {
 }
 
 impl SssConfig {
-    /// Defaults, with the kernel strength and falloff of the scene's first skin material (the
-    /// separable kernel is one per frame).
+    /// The scene's `[render]` method, samples, follow_surface and Gaussians, with the kernel
+    /// strength and falloff of its first skin material (the separable kernel is one per frame).
     pub fn for_scene(scene: &crate::Scene) -> Self {
-        let mut c = Self::default();
+        let r = &scene.desc.render;
+        let mut c = Self {
+            method: r.sss,
+            samples: r.samples,
+            follow_surface: r.follow_surface,
+            gaussians_enabled: r.gaussians,
+            ..Self::default()
+        };
         if let Some(o) = scene.objects.iter().find(|o| o.material.sss_strength > 0.0) {
             c.strength = o.material.kernel_strength;
             c.falloff = o.material.falloff;

@@ -25,7 +25,21 @@ pub enum DebugView {
     DiffuseBeforeSss,
     /// Specular radiance only
     Specular,
+    /// Thickness the transmittance sees (000_*): distance from where each shadowed light
+    /// behind the surface enters the object to the shaded point, in millimetres of the
+    /// profile, the thinnest over those lights; a colour ramp from white (0 mm) through yellow
+    /// and red to black (`THICKNESS_RANGE_MM` and beyond). Grey: skin that no shadowed light
+    /// behind it reaches. The SSS passes are skipped.
+    Thickness,
+    /// The irradiance that is blurred: with texture-space diffusion, the UV-space irradiance
+    /// map of the first skin object (d'Eon 2007), letterboxed; with screen-space methods, the
+    /// lit image before the blur (as `DiffuseBeforeSss`).
+    Irradiance,
 }
+
+/// Thickness shown as black by `DebugView::Thickness`, in profile millimetres: skin's
+/// transmittance is negligible beyond it (T(8 mm) < 1e-3 for every channel).
+pub const THICKNESS_RANGE_MM: f32 = 8.0;
 
 impl DebugView {
     fn code(self) -> f32 {
@@ -35,7 +49,17 @@ impl DebugView {
             DebugView::Depth => 2.0,
             DebugView::Diffuse | DebugView::DiffuseBeforeSss => 3.0,
             DebugView::Specular => 4.0,
+            DebugView::Thickness => 5.0,
+            DebugView::Irradiance => 3.0,
         }
+    }
+
+    /// Whether the SSS passes run for this view (they would blur what it shows).
+    pub fn blurs(self) -> bool {
+        !matches!(
+            self,
+            DebugView::DiffuseBeforeSss | DebugView::Thickness | DebugView::Irradiance
+        )
     }
 }
 
@@ -141,10 +165,24 @@ impl ToneMapPass {
 
     /// Sets exposure (in EV), the debug view and the far plane (for the depth view).
     pub fn set_params(&self, queue: &wgpu::Queue, exposure_ev: f32, view: DebugView, far: f32) {
+        self.set_params_with(queue, exposure_ev, view.code(), far, false);
+    }
+
+    /// As `set_params`; with `letterbox`, `diffuse` may be any size (a UV-space map) and is
+    /// shown as a centred square, the rest black.
+    pub fn set_params_with(
+        &self,
+        queue: &wgpu::Queue,
+        exposure_ev: f32,
+        code: f32,
+        far: f32,
+        letterbox: bool,
+    ) {
+        let flags = if letterbox { 1.0 } else { 0.0 };
         queue.write_buffer(
             &self.params,
             0,
-            bytemuck::cast_slice(&[exposure_ev.exp2(), view.code(), far, 0.0]),
+            bytemuck::cast_slice(&[exposure_ev.exp2(), code, far, flags]),
         );
     }
 

@@ -38,11 +38,12 @@ fn profile_transmittance(s_mm: f32) -> vec3<f32> {
 // Light transmitted through thin parts (Jimenez et al. 2010): thickness from the standard
 // linear-depth shadow map, T(s) of the material's profile, back irradiance from the vertex
 // normal. Returns T(s) * E, to be multiplied by the light's radiance and the albedo.
-fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    let method = u32(lights.transmittance.x);
+// The thickness s between where `light` enters the object and `p`, in millimetres of the
+// object's profile; < 0 where it is unknown (no shadow map, outside it, not translucent).
+fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     // Only lights with a shadow map know the thickness: the others add nothing (no glow).
-    if (method == 0u || method > 3u || light.direction.w < 0.0 || object.params.w <= 0.0) {
-        return vec3<f32>(0.0);
+    if (light.direction.w < 0.0 || object.params.w <= 0.0) {
+        return -1.0;
     }
     // Shrink along the vertex normal so points at the silhouette project inside the object
     // in the shadow map rather than onto background texels (000_*, instead of Green's growing
@@ -50,15 +51,55 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
     let shrunk = p - n_vertex * lights.transmittance.y;
     let sc = shadow_coord(light, shrunk);
     if (!sc.inside) {
-        return vec3<f32>(0.0);
+        return -1.0;
     }
     let d_in = shadow_distance(light, sc, i32(lights.transmittance.z));
     if (d_in < 0.0) {
-        return vec3<f32>(0.0);
+        return -1.0;
     }
     let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
-    let s_mm = s_units / (object.params.z * object.params.w);
+    return s_units / (object.params.z * object.params.w);
+}
+
+// The back-irradiance factor of `transmittance`: the 0.3 lets light wrap around thin edges
+// (000_*, Figure 7); 0 where the surface faces the light.
+fn back_irradiance(n_vertex: vec3<f32>, l: vec3<f32>) -> f32 {
+    return max(0.3 + dot(-n_vertex, l), 0.0);
+}
+
+// The thinnest thickness over the lights that transmit light here, those with a shadow map
+// behind the surface (the thickness debug view); < 0 if none. Lights in front are left out:
+// they see the point itself (thickness 0) and transmit nothing through it.
+fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
+    var best = -1.0;
+    let count = min(lights.count.x, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.lights[i];
+        var l = -light.direction.xyz;
+        if (light.position.w != KIND_DIRECTIONAL) {
+            l = normalize(light.position.xyz - p);
+        }
+        if (back_irradiance(n_vertex, l) <= 0.0) {
+            continue;
+        }
+        let s = light_thickness_mm(light, p, n_vertex);
+        if (s >= 0.0 && (best < 0.0 || s < best)) {
+            best = s;
+        }
+    }
+    return best;
+}
+
+fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let method = u32(lights.transmittance.x);
+    if (method == 0u || method > 3u) {
+        return vec3<f32>(0.0);
+    }
+    let s_mm = light_thickness_mm(light, p, n_vertex);
+    if (s_mm < 0.0) {
+        return vec3<f32>(0.0);
+    }
     var t = vec3<f32>(0.0);
     switch method {
         case 1u: {
@@ -76,10 +117,8 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
         }
         default: {}
     }
-    // Back irradiance is taken as locally constant from the low-frequency vertex normal;
-    // the 0.3 lets light wrap around thin edges (000_*, Figure 7).
-    let e = max(0.3 + dot(-n_vertex, l), 0.0);
-    return t * e;
+    // Back irradiance is taken as locally constant from the low-frequency vertex normal.
+    return t * back_irradiance(n_vertex, l);
 }
 
 // Translucent shadow maps (d'Eon et al.; method 4): the thickness s comes from the
