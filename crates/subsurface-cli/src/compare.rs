@@ -70,6 +70,10 @@ pub struct RegionResult {
     pub mean_reference: [f32; 3],
     /// (Y_realtime - Y_reference) / Y_reference of the region means' luminance.
     pub rel_error: f32,
+    /// Standard error of `rel_error` from the reference's own noise (its `.stderr.exr`; the
+    /// channels are taken as fully correlated, so this errs on the large side). None without
+    /// a standard-error image.
+    pub rel_stderr: Option<f32>,
 }
 
 #[derive(Debug, Serialize)]
@@ -84,6 +88,15 @@ pub struct Report {
     pub rmse: f32,
     /// `rmse` / mean reference radiance.
     pub rel_rmse: f32,
+    /// RMS of the reference's per-pixel standard error: the part of `rmse` that is the path
+    /// tracer's noise. None without a standard-error image.
+    pub noise_rms: Option<f32>,
+    /// RMSE against the noise-free image, estimated: E[(ours - ref)^2] = (ours - truth)^2 +
+    /// var(ref), so sqrt(max(0, rmse^2 - noise_rms^2)). Separates methods that `rmse` cannot
+    /// when the reference is noisy.
+    pub rmse_debiased: Option<f32>,
+    /// `rmse_debiased` / mean reference radiance.
+    pub rel_rmse_debiased: Option<f32>,
     pub flip_mean: f32,
     pub regions: Vec<RegionResult>,
     /// Largest difference (1/255 steps) between our CPU tone map and the GPU's frame: checks
@@ -394,6 +407,33 @@ pub fn read_reference(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
     Ok((w, h, px))
 }
 
+/// The standard-error image `tools/reference/render_reference.py` writes beside a reference
+/// (REF.stderr.exr for REF.exr), if there is one.
+pub fn stderr_path(reference: &Path) -> PathBuf {
+    let name = reference
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let stem = name
+        .strip_suffix(".exr")
+        .or_else(|| name.strip_suffix(".EXR"))
+        .unwrap_or(&name);
+    reference.with_file_name(format!("{stem}.stderr.exr"))
+}
+
+fn read_stderr(reference: &Path, w: u32, h: u32) -> Result<Option<Vec<[f32; 3]>>> {
+    let path = stderr_path(reference);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let (sw, sh, se) = read_reference(&path)?;
+    anyhow::ensure!(
+        (sw, sh) == (w, h),
+        "{}: {sw}x{sh}, but the reference is {w}x{h}",
+        path.display()
+    );
+    Ok(Some(se))
+}
+
 fn crate_one_line(s: &str) -> String {
     s.lines()
         .map(str::trim)
@@ -438,6 +478,7 @@ fn hot(t: f32) -> [u8; 3] {
 pub fn compare(args: &CompareArgs) -> Result<Report> {
     // Check the inputs before the (slow) render and before creating the output.
     let (rw, rh, reference) = read_reference(&args.reference)?;
+    let stderr = read_stderr(&args.reference, rw, rh)?;
     let regions = load_regions(args)?;
     let mut scene = crate::render::load_scene(args.scene.as_ref(), None)?;
     let mut opts = crate::render::options(&scene, None, None, args.exposure)?;
@@ -472,6 +513,14 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .flat_map(|(a, b)| (0..3).map(move |c| f64::from(a[c] - b[c]).powi(2)))
         .sum();
     let rmse = (sq / (3 * n) as f64).sqrt();
+    let noise_ms = stderr.as_ref().map(|se| {
+        se.iter()
+            .flatten()
+            .map(|v| f64::from(*v).powi(2))
+            .sum::<f64>()
+            / (3 * n) as f64
+    });
+    let rmse_debiased = noise_ms.map(|v| (rmse * rmse - v).max(0.0).sqrt());
     let ref_mean = reference
         .iter()
         .flatten()
@@ -491,6 +540,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .map(|r| {
             let [x0, y0, x1, y1] = r.rect;
             let (mut a, mut b, mut count) = ([0.0f64; 3], [0.0f64; 3], 0usize);
+            let mut var_y = 0.0f64;
             for y in (y0 * h as f32) as u32..((y1 * h as f32).ceil() as u32).min(h) {
                 for x in (x0 * w as f32) as u32..((x1 * w as f32).ceil() as u32).min(w) {
                     let i = (y * w + x) as usize;
@@ -498,6 +548,11 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
                         for c in 0..3 {
                             a[c] += f64::from(ours[i][c]);
                             b[c] += f64::from(reference[i][c]);
+                        }
+                        if let Some(se) = &stderr {
+                            // Pixels are independent; channels share paths, so their errors
+                            // add linearly (the upper bound).
+                            var_y += f64::from(luminance(se[i])).powi(2);
                         }
                         count += 1;
                     }
@@ -516,6 +571,9 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
                 } else {
                     (ya - yb) / yb
                 },
+                rel_stderr: stderr
+                    .as_ref()
+                    .map(|_| (var_y.sqrt() * k / f64::from(yb.max(1e-12))) as f32),
             }
         })
         .collect();
@@ -567,6 +625,9 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         height: h,
         rmse: rmse as f32,
         rel_rmse: (rmse / ref_mean.max(1e-12)) as f32,
+        noise_rms: noise_ms.map(|v| v.sqrt() as f32),
+        rmse_debiased: rmse_debiased.map(|v| v as f32),
+        rel_rmse_debiased: rmse_debiased.map(|v| (v / ref_mean.max(1e-12)) as f32),
         flip_mean: flip_mean as f32,
         regions: region_results,
         tonemap_check_max_diff: check,
@@ -582,10 +643,24 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let regions: Vec<String> = r
             .regions
             .iter()
-            .map(|g| format!("{} {:+.1}%", g.name, 100.0 * g.rel_error))
+            .map(|g| match g.rel_stderr {
+                Some(se) => format!(
+                    "{} {:+.1}% (±{:.1}%)",
+                    g.name,
+                    100.0 * g.rel_error,
+                    100.0 * se
+                ),
+                None => format!("{} {:+.1}%", g.name, 100.0 * g.rel_error),
+            })
             .collect();
+        let noise = match (r.rmse_debiased, r.noise_rms) {
+            (Some(d), Some(n)) => {
+                format!(" ({:.4} with the reference's noise {n:.4} taken out)", d)
+            }
+            _ => String::new(),
+        };
         println!(
-            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean), FLIP {:.4}, region means {}; wrote {}",
+            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}; wrote {}",
             r.scene,
             r.reference,
             r.sss.as_str().unwrap_or("?"),

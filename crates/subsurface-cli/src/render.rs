@@ -51,8 +51,10 @@ pub struct TransmittanceArgs {
     /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
     /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
     /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
-    /// irradiance blurred in texture space, same T(s) as paper), off = none [default: the scene's
-    /// render.transmittance, paper].
+    /// irradiance blurred in texture space, same T(s) as paper), diffusion = T(s) from diffusion
+    /// theory for the material's measured coefficients (multipole slab transmittance; thick
+    /// parts still pass red light), off = none [default: the scene's render.transmittance,
+    /// paper].
     #[arg(long, value_enum)]
     pub transmittance: Option<TransmittanceArg>,
     /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness
@@ -71,6 +73,7 @@ pub enum TransmittanceArg {
     Beer,
     SeedReport,
     Tsm,
+    Diffusion,
     Off,
 }
 
@@ -81,6 +84,7 @@ impl From<TransmittanceArg> for TransmittanceMethod {
             TransmittanceArg::Beer => TransmittanceMethod::Beer,
             TransmittanceArg::SeedReport => TransmittanceMethod::SeedReport,
             TransmittanceArg::Tsm => TransmittanceMethod::Tsm,
+            TransmittanceArg::Diffusion => TransmittanceMethod::Diffusion,
             TransmittanceArg::Off => TransmittanceMethod::Off,
         }
     }

@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use crate::dipole::{Dipole, Multipole};
 use crate::error::{Result, count, positive};
 use crate::gaussian::SumOfGaussians;
 
@@ -40,6 +41,49 @@ impl TransmittanceLut {
                 profile.transmittance(s).map(|t| t as f32)
             })
             .collect();
+        Ok(Self {
+            resolution,
+            s_max_mm,
+            data,
+        })
+    }
+
+    /// Range of [`TransmittanceLut::diffusion`]: past 32 mm even skin's red channel (the
+    /// least absorbed of the measured materials that transmit) passes under 1e-5.
+    pub const DIFFUSION_S_MAX_MM: f32 = 32.0;
+
+    /// Transmittance from diffusion theory for a measured material: light through a slab of
+    /// thickness `s` (the multipole of Donner and Jensen 2005, [`Multipole`]), as a factor of
+    /// the material's total diffuse reflectance `R_d`: `T(s) = T_t(s) / R_d`, so that the
+    /// lighting pass's `albedo * T(s) * E` (with albedo = `R_d`) is the slab's transmitted
+    /// `T_t(s) * E`. Unlike the sum-of-Gaussians `T(s)` this decays exponentially, as
+    /// diffusion does, so thick parts (fingers, 10-15 mm) still pass red light.
+    ///
+    /// The multipole is not valid for slabs thinner than about two transport mean free
+    /// paths (its total transmittance even turns negative there), so the table is the
+    /// non-increasing upper envelope from the thick end, clamped to 0..=1: thin parts
+    /// transmit everything, as the Gaussian `T(0) = 1` does.
+    pub fn diffusion(dipole: &Dipole, resolution: u32, s_max_mm: f32) -> Result<Self> {
+        count("resolution", resolution as usize, 2, 65536)?;
+        positive("s_max_mm", s_max_mm as f64)?;
+        let rd = dipole.total_reflectance();
+        let last = (resolution - 1) as f64;
+        let mut data = vec![[0.0f32; 3]; resolution as usize];
+        let mut envelope = [0.0f64; 3];
+        for i in (0..resolution as usize).rev() {
+            // s = 0 is no slab at all; the envelope carries the thinnest valid value there.
+            let s = (i as f64 / last * s_max_mm as f64).max(1e-3);
+            let t = Multipole::new(*dipole, s, Multipole::DEFAULT_PAIRS)?.total_transmittance();
+            for c in 0..3 {
+                let v = if t[c].is_finite() && rd[c] > 0.0 {
+                    t[c] / rd[c]
+                } else {
+                    0.0
+                };
+                envelope[c] = envelope[c].max(v).min(1.0);
+                data[i][c] = envelope[c] as f32;
+            }
+        }
         Ok(Self {
             resolution,
             s_max_mm,
@@ -144,5 +188,60 @@ mod tests {
                 .starts_with("s_max_mm:")
         );
         assert!(TransmittanceLut::new(&skin, 16, f32::INFINITY).is_err());
+    }
+
+    fn skin1() -> Dipole {
+        Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap()
+    }
+
+    #[test]
+    fn diffusion_lut_is_the_slab_transmittance_where_the_multipole_holds() {
+        let d = skin1();
+        let lut = TransmittanceLut::diffusion(&d, 1024, 32.0).unwrap();
+        let rd = d.total_reflectance();
+        // From 3 mm on (over two transport mean free paths for every channel) the table is
+        // T_t(s) / R_d itself.
+        for s in [3.0, 5.0, 8.0, 12.0, 20.0] {
+            let t = Multipole::new(d, s, Multipole::DEFAULT_PAIRS)
+                .unwrap()
+                .total_transmittance();
+            let got = lut.sample(s as f32);
+            for c in 0..3 {
+                let want = (t[c] / rd[c]).min(1.0);
+                assert!(
+                    (f64::from(got[c]) - want).abs() <= 2e-3 * want.max(1e-3) + 1e-6,
+                    "s = {s}, channel {c}: {} vs {want}",
+                    got[c]
+                );
+            }
+        }
+        // Red through a 15 mm finger: about 3% of what the surface reflects (a visible
+        // glow), where the sum of Gaussians gives nothing.
+        let red15 = lut.sample(15.0)[0];
+        assert!((0.02..0.04).contains(&red15), "{red15}");
+        assert!(SumOfGaussians::skin().transmittance(15.0)[0] < 1e-10);
+    }
+
+    #[test]
+    fn diffusion_lut_is_monotone_bounded_and_redder_with_depth() {
+        let lut = TransmittanceLut::diffusion(&skin1(), 1024, 32.0).unwrap();
+        assert_eq!(lut.data[0], [1.0, 1.0, 1.0]);
+        for w in lut.data.windows(2) {
+            for c in 0..3 {
+                assert!(w[1][c] <= w[0][c], "{w:?}");
+                assert!((0.0..=1.0).contains(&w[1][c]), "{w:?}");
+            }
+        }
+        let ratio = |s: f32| {
+            let t = lut.sample(s);
+            t[0] / t[1].max(1e-30)
+        };
+        assert!(
+            ratio(8.0) > 5.0 * ratio(3.0),
+            "{} vs {}",
+            ratio(8.0),
+            ratio(3.0)
+        );
+        assert!(TransmittanceLut::diffusion(&skin1(), 1, 32.0).is_err());
     }
 }

@@ -240,10 +240,7 @@ pub fn upload_objects(
             &format!("{label}.material.profile"),
         )?;
         if !luts.contains_key(&object.material.profile) {
-            luts.insert(
-                object.material.profile.clone(),
-                lut_texture(ctx, &optics.profile)?,
-            );
+            luts.insert(object.material.profile.clone(), lut_texture(ctx, &optics)?);
         }
         let (lut, lut_range) = &luts[&object.material.profile];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -30,7 +30,7 @@ pub struct LightUniform {
 pub struct LightsUniform {
     pub count: [u32; 4],
     pub ambient: [f32; 4],
-    /// method (0 off, 1 paper, 2 Beer, 3 seed report, 4 TSM), normal shrink, thickness filter,
+    /// method (0 off, 1 paper, 2 Beer, 3 seed report, 4 TSM, 5 diffusion), normal shrink, thickness filter,
     /// 1 = write the thickness instead of diffuse (`DebugView::Thickness`)
     pub transmittance: [f32; 4],
     pub lights: [LightUniform; MAX_LIGHTS],

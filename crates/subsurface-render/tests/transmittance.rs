@@ -414,3 +414,42 @@ fn no_transmittance_where_the_surface_faces_the_light() {
         back[32 * 64 + 32]
     );
 }
+
+/// `diffusion`: a 6 mm slab of skin lit from behind passes what the multipole says a 6 mm
+/// slab of skin1 transmits (T_t / R_d, times E = 1.3), far more red than the Gaussian T(s).
+#[test]
+fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
+    if context().is_none() {
+        return;
+    }
+    let thickness = 0.006;
+    let s = backlit(
+        &format!("{{ shape = \"slab\", width = 0.05, height = 0.05, thickness = {thickness} }}"),
+        1024,
+    );
+    let (diffusion, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
+    let (paper, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Paper);
+    let centre = (32 * 64 + 32) as usize;
+    let skin1 =
+        subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
+    let s_mm = thickness * 1000.0 - SHRINK * 1000.0;
+    let want = subsurface_profile::TransmittanceLut::diffusion(&skin1, 2048, 32.0)
+        .unwrap()
+        .sample(s_mm)
+        .map(|t| t * 1.3);
+    let got = diffusion[centre];
+    for c in 0..3 {
+        assert!(
+            (got[c] - want[c]).abs() < 0.002 + 0.03 * want[c],
+            "channel {c}: {} vs multipole {}",
+            got[c],
+            want[c]
+        );
+    }
+    assert!(want[0] > 0.3, "6 mm of skin1 should pass red: {want:?}");
+    assert!(
+        got[0] > 100.0 * paper[centre][0],
+        "diffusion {got:?} vs paper {:?}",
+        paper[centre]
+    );
+}

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use subsurface_profile::{Material, SumOfGaussians, TransmittanceLut, material};
+use subsurface_profile::{Dipole, Material, SumOfGaussians, TransmittanceLut, material};
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
@@ -27,6 +27,12 @@ pub enum TransmittanceMethod {
     /// the surface nearest the light, whose irradiance, blurred in texture space, is
     /// attenuated by the same T(s) as `Paper` (see `passes::texture_space`).
     Tsm,
+    /// Diffusion theory (our extension, see `docs/fidelity.md`): T(s) is the light a slab of
+    /// the material's measured coefficients transmits (Donner and Jensen 2005's multipole),
+    /// relative to what it reflects; it decays exponentially rather than like a Gaussian, so
+    /// fingers and thick ears still glow red. The Gaussian skin preset uses skin1's
+    /// coefficients.
+    Diffusion,
 }
 
 impl TransmittanceMethod {
@@ -37,6 +43,7 @@ impl TransmittanceMethod {
             TransmittanceMethod::Beer => 2.0,
             TransmittanceMethod::SeedReport => 3.0,
             TransmittanceMethod::Tsm => 4.0,
+            TransmittanceMethod::Diffusion => 5.0,
         }
     }
 }
@@ -82,16 +89,24 @@ impl TransmittanceConfig {
     }
 }
 
-/// A material's profile as Gaussians (fitted for measured materials) and its extinction
-/// coefficient for Beer-Lambert, per millimetre.
+/// A material's profile as Gaussians (fitted for measured materials), its extinction
+/// coefficient for Beer-Lambert, per millimetre, and its measured coefficients for
+/// diffusion-theory transmittance.
 #[derive(Clone, Debug)]
 pub struct MaterialOptics {
     pub profile: SumOfGaussians,
     pub sigma_t: [f32; 3],
+    pub dipole: Dipole,
 }
 
-/// Jensen et al. 2001's skin1, the extinction used for the Gaussian skin preset.
-const SKIN1_SIGMA_T: [f32; 3] = [0.74 + 0.032, 0.88 + 0.17, 1.01 + 0.48];
+/// Jensen et al. 2001's skin1 (sigma_a, sigma_s' in 1/mm, eta), what the Gaussian skin preset
+/// uses where measured coefficients are needed.
+fn skin1() -> Dipole {
+    match material("skin1") {
+        Ok(Material::Dipole { dipole, .. }) => dipole,
+        _ => unreachable!("skin1 is a measured preset"),
+    }
+}
 
 /// Looks materials up by name and fits measured ones once.
 #[derive(Default)]
@@ -106,10 +121,15 @@ impl MaterialCache {
         }
         let m = material(name).map_err(|e| RenderError::invalid(field, e.to_string()))?;
         let optics = match &m {
-            Material::Gaussians { profile, .. } => MaterialOptics {
-                profile: profile.clone(),
-                sigma_t: SKIN1_SIGMA_T,
-            },
+            Material::Gaussians { profile, .. } => {
+                let dipole = skin1();
+                MaterialOptics {
+                    profile: profile.clone(),
+                    sigma_t: [0, 1, 2]
+                        .map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32),
+                    dipole,
+                }
+            }
             Material::Dipole { dipole, .. }
             | Material::Multipole {
                 multipole: subsurface_profile::Multipole { dipole, .. },
@@ -123,6 +143,7 @@ impl MaterialCache {
                 MaterialOptics {
                     profile: fit.profile,
                     sigma_t,
+                    dipole: *dipole,
                 }
             }
         };
@@ -131,23 +152,29 @@ impl MaterialCache {
     }
 }
 
-/// T(s) of `profile` as an Rgba16Float texture (filterable everywhere), `s_max_mm` wide.
+/// The T(s) tables of a material as one Rgba16Float texture (filterable everywhere), two rows:
+/// the sum-of-Gaussians T(s) of 000_* over the returned range in mm (row 0), and the
+/// diffusion T(s) over `TransmittanceLut::DIFFUSION_S_MAX_MM` (row 1, `Diffusion`).
 pub fn lut_texture(
     ctx: &GpuContext,
-    profile: &SumOfGaussians,
+    optics: &MaterialOptics,
 ) -> Result<(wgpu::TextureView, f32), RenderError> {
-    let lut = TransmittanceLut::new(profile, 2048, 6.0)?;
+    let res = TransmittanceLut::DEFAULT_RESOLUTION;
+    let lut = TransmittanceLut::new(&optics.profile, res, TransmittanceLut::DEFAULT_S_MAX_MM)?;
+    let diffusion =
+        TransmittanceLut::diffusion(&optics.dipole, res, TransmittanceLut::DIFFUSION_S_MAX_MM)?;
     let data: Vec<half::f16> = lut
         .to_rgba()
         .iter()
+        .chain(diffusion.to_rgba().iter())
         .flatten()
         .map(|v| half::f16::from_f32(*v))
         .collect();
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("transmittance lut"),
         size: wgpu::Extent3d {
-            width: lut.resolution,
-            height: 1,
+            width: res,
+            height: 2,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -162,8 +189,8 @@ pub fn lut_texture(
         bytemuck::cast_slice(&data),
         wgpu::TexelCopyBufferLayout {
             offset: 0,
-            bytes_per_row: Some(8 * lut.resolution),
-            rows_per_image: None,
+            bytes_per_row: Some(8 * res),
+            rows_per_image: Some(2),
         },
         texture.size(),
     );

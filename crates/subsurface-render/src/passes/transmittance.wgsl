@@ -24,15 +24,28 @@ fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> f32 {
     return select(-1.0, sum / max(n, 1.0), n > 0.0);
 }
 
-// T(s) of the object's profile from its LUT, 0 beyond the LUT's range.
-fn profile_transmittance(s_mm: f32) -> vec3<f32> {
-    let range = object.transmit.a;
+// Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the LUT's second row).
+const DIFFUSION_RANGE_MM: f32 = 32.0;
+
+// One row of the object's T(s) LUT over 0..range mm, 0 beyond it. Row 0 sits at v = 0.25 and
+// row 1 at v = 0.75, the texel centres of the two-texel-high table, so rows never mix.
+fn lut_row(s_mm: f32, range: f32, v: f32) -> vec3<f32> {
     let res = f32(textureDimensions(transmittance_lut).x);
     if (s_mm > range) {
         return vec3<f32>(0.0);
     }
     let u = (s_mm / range * (res - 1.0) + 0.5) / res;
-    return textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, 0.5), 0.0).rgb;
+    return textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, v), 0.0).rgb;
+}
+
+// T(s) of the object's sum-of-Gaussians profile (000_*).
+fn profile_transmittance(s_mm: f32) -> vec3<f32> {
+    return lut_row(s_mm, object.transmit.a, 0.25);
+}
+
+// T(s) from diffusion theory for the object's measured coefficients (lut.rs, `diffusion`).
+fn diffusion_transmittance(s_mm: f32) -> vec3<f32> {
+    return lut_row(s_mm, DIFFUSION_RANGE_MM, 0.75);
 }
 
 // Light transmitted through thin parts (Jimenez et al. 2010): thickness from the standard
@@ -93,7 +106,8 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
 
 fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     let method = u32(lights.transmittance.x);
-    if (method == 0u || method > 3u) {
+    // 4 (translucent shadow maps) has its own path, tsm_transmittance.
+    if (method == 0u || method == 4u || method > 5u) {
         return vec3<f32>(0.0);
     }
     let s_mm = light_thickness_mm(light, p, n_vertex);
@@ -114,6 +128,9 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
             // The ad-hoc falloff of 001_*, proportional to s^-0.6 (its constants are not
             // given; 0.15 makes 1 mm transmit about as much as the profile does).
             t = vec3<f32>(min(0.15 / pow(max(s_mm, 1e-3), 0.6), 1.0));
+        }
+        case 5u: {
+            t = diffusion_transmittance(s_mm);
         }
         default: {}
     }
