@@ -25,10 +25,10 @@ from make_references import subsurface_bin  # noqa: E402
 # Every screen-space method with the default transmittance, every transmittance method with
 # the default blur, and the baseline without either.
 COMBOS = [("none", "off")] + [(s, "paper") for s in ("none", "gaussian6", "separable", "hable13")] + [
-    ("separable", t) for t in ("off", "beer", "seed-report")
+    ("separable", t) for t in ("off", "beer", "seed-report", "diffusion")
 ]
 # Side-by-side images kept in the repository (the others go to a temporary directory).
-KEEP_IMAGES = {("none", "off"), ("separable", "paper")}
+KEEP_IMAGES = {("none", "off"), ("separable", "paper"), ("separable", "diffusion")}
 
 
 def main():
@@ -56,11 +56,16 @@ def main():
                 results[name][key] = {
                     "rmse": j["rmse"],
                     "rel_rmse": j["rel_rmse"],
+                    "noise_rms": j["noise_rms"],
+                    "rmse_debiased": j["rmse_debiased"],
+                    "rel_rmse_debiased": j["rel_rmse_debiased"],
                     "flip_mean": j["flip_mean"],
                     "regions": {g["name"]: g["rel_error"] for g in j["regions"]},
+                    "regions_stderr": {g["name"]: g["rel_stderr"] for g in j["regions"]},
                     "image": img if (sss, tr) in KEEP_IMAGES else None,
                 }
-                print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} FLIP {j['flip_mean']:.4f}", file=sys.stderr)
+                print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} debiased {j['rmse_debiased']} FLIP {j['flip_mean']:.4f} "
+                      + " ".join(f"{g['name']} {100 * g['rel_error']:+.1f}%" for g in j["regions"]), file=sys.stderr)
     with open(os.path.join(ROOT, "references/fidelity.json"), "w") as f:
         json.dump({"generated_by": "tools/reference/fidelity_table.py", "scenes": results}, f, indent=1)
         f.write("\n")
@@ -77,11 +82,28 @@ def write_markdown(results):
         lines.append(f"### {name}")
         lines.append("")
         region_names = list(next(iter(combos.values()))["regions"])
-        lines.append("| sss + transmittance | RMSE | rel. RMSE | FLIP | " + " | ".join(f"{r} (mean err.)" for r in region_names) + " |")
-        lines.append("|---|---:|---:|---:|" + "---:|" * len(region_names))
+        first = next(iter(combos.values()))
+        if first.get("noise_rms") is not None:
+            lines.append(f"Reference noise (RMS of its per-pixel standard error): {first['noise_rms']:.4f}; "
+                         "region means: ± one standard error of the reference's mean.")
+            lines.append("")
+        lines.append("| sss + transmittance | RMSE | RMSE, noise removed | rel. | FLIP | "
+                     + " | ".join(f"{r} (mean err.)" for r in region_names) + " |")
+        lines.append("|---|---:|---:|---:|---:|" + "---:|" * len(region_names))
+
+        def reg(v, r):
+            se = (v.get("regions_stderr") or {}).get(r)
+            pm = f" ±{100 * se:.1f}" if se is not None else ""
+            return f"{100 * v['regions'][r]:+.1f}%{pm}"
+
+        def opt(x, fmt):
+            return "–" if x is None else format(x, fmt)
+
         for key, v in combos.items():
-            regs = " | ".join(f"{100 * v['regions'][r]:+.1f}%" for r in region_names)
-            lines.append(f"| `{key}` | {v['rmse']:.4f} | {100 * v['rel_rmse']:.0f}% | {v['flip_mean']:.3f} | {regs} |")
+            regs = " | ".join(reg(v, r) for r in region_names)
+            rel = None if v.get("rel_rmse_debiased") is None else 100 * v["rel_rmse_debiased"]
+            lines.append(f"| `{key}` | {v['rmse']:.4f} | {opt(v.get('rmse_debiased'), '.4f')} | "
+                         f"{opt(rel, '.0f')}% | {v['flip_mean']:.3f} | {regs} |")
         lines.append("")
         for key, v in combos.items():
             if v["image"]:

@@ -79,19 +79,36 @@ impl Mesh {
         }
     }
 
+    /// Chart `index` of a 3 x 2 UV atlas: `uv` in 0..1 mapped into its cell, inset by a
+    /// margin. Each face of the procedural shapes gets its own cell, because texture-space
+    /// diffusion (d'Eon 2007) needs a one-to-one UV map: faces sharing UVs would all write
+    /// their irradiance to the same texels. The margin leaves room for the padding that
+    /// keeps the blur from pulling in black at chart borders.
+    fn atlas_uv(index: usize, uv: [f32; 2]) -> [f32; 2] {
+        const COLS: usize = 3;
+        const ROWS: usize = 2;
+        const MARGIN: f32 = 0.04; // of a cell: 12+ texels of a 1024 map
+        let (cx, cy) = ((index % COLS) as f32, (index / COLS % ROWS) as f32);
+        let inset = |t: f32| MARGIN + t.clamp(0.0, 1.0) * (1.0 - 2.0 * MARGIN);
+        [
+            (cx + inset(uv[0])) / COLS as f32,
+            (cy + inset(uv[1])) / ROWS as f32,
+        ]
+    }
+
     /// Builds a mesh from a list of quads (4 corners counter-clockwise seen
-    /// from the front, with a shared flat normal and UVs (0,0) (1,0) (1,1) (0,1)).
+    /// from the front, with a shared flat normal), quad `i` in atlas chart `i`.
     fn from_flat_quads(quads: &[[Vec3; 4]]) -> Mesh {
         let mut mesh = Mesh::default();
         let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-        for q in quads {
+        for (i, q) in quads.iter().enumerate() {
             let n = (q[1] - q[0]).cross(q[2] - q[0]).normalize_or(Vec3::Z);
             let base = mesh.vertices.len() as u32;
             for (p, uv) in q.iter().zip(uvs) {
                 mesh.vertices.push(Vertex {
                     position: p.to_array(),
                     normal: n.to_array(),
-                    uv,
+                    uv: Self::atlas_uv(i, uv),
                     tangent: [0.0; 4],
                 });
             }
@@ -178,23 +195,26 @@ impl Mesh {
         ];
         let mut m = Self::from_flat_quads(&quads);
         // End caps (triangles, y = +-height/2).
-        let mut cap = |a: Vec3, b: Vec3, c: Vec3, n: Vec3| {
+        let mut cap = |chart: usize, a: Vec3, b: Vec3, c: Vec3, n: Vec3| {
             let base = m.vertices.len() as u32;
             for p in [a, b, c] {
                 m.vertices.push(Vertex {
                     position: p.to_array(),
                     normal: n.to_array(),
-                    uv: [
-                        p.x / length + 0.5,
-                        p.z / max_thickness.max(f32::MIN_POSITIVE) + 0.5,
-                    ],
+                    uv: Self::atlas_uv(
+                        chart,
+                        [
+                            p.x / length + 0.5,
+                            p.z / max_thickness.max(f32::MIN_POSITIVE) + 0.5,
+                        ],
+                    ),
                     tangent: [0.0; 4],
                 });
             }
             m.indices.extend_from_slice(&[base, base + 1, base + 2]);
         };
-        cap(apex_hi, f_hi, b_hi, Vec3::Y);
-        cap(apex_lo, b_lo, f_lo, -Vec3::Y);
+        cap(3, apex_hi, f_hi, b_hi, Vec3::Y);
+        cap(4, apex_lo, b_lo, f_lo, -Vec3::Y);
         m.generate_tangents();
         m
     }
@@ -654,6 +674,33 @@ mod tests {
                 a.dot(b.cross(c)) / 6.0
             })
             .sum()
+    }
+
+    /// Texture-space diffusion needs every face in its own part of the UV square: faces with
+    /// different normals never share a UV cell, and all UVs lie in 0..1.
+    #[test]
+    fn procedural_faces_have_their_own_uv_charts() {
+        for m in [Mesh::slab(0.05, 0.04, 0.01), Mesh::wedge(0.08, 0.04, 0.008)] {
+            let mut cells: std::collections::HashMap<(u32, u32), [i32; 3]> = Default::default();
+            for t in m.indices.chunks_exact(3) {
+                let v: Vec<&Vertex> = t.iter().map(|&i| &m.vertices[i as usize]).collect();
+                let c = v.iter().fold([0.0f32; 2], |a, v| {
+                    assert!(v.uv.iter().all(|x| (0.0..=1.0).contains(x)), "{:?}", v.uv);
+                    [a[0] + v.uv[0] / 3.0, a[1] + v.uv[1] / 3.0]
+                });
+                let cell = ((c[0] * 3.0) as u32, (c[1] * 2.0) as u32);
+                // Every corner of the triangle is in the same cell as its centre.
+                for v in &v {
+                    let inside =
+                        (v.uv[0] * 3.0).floor() as u32 == cell.0 || (v.uv[0] * 3.0).fract() == 0.0;
+                    assert!(inside, "triangle crosses cells: {:?}", v.uv);
+                }
+                let n = v[0].normal.map(|x| (x * 1000.0).round() as i32);
+                let prev = cells.entry(cell).or_insert(n);
+                assert_eq!(*prev, n, "two faces share UV cell {cell:?}");
+            }
+            assert!(cells.len() >= 5, "{} charts", cells.len());
+        }
     }
 
     #[test]
