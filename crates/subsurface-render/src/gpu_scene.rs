@@ -12,6 +12,7 @@ use crate::mesh::Vertex;
 use crate::passes::transmittance::{
     MaterialCache, MaterialOptics, TransmittanceConfig, lut_texture,
 };
+use crate::passes::util;
 use crate::scene::{LightDesc, LightKind, Object, Scene};
 use crate::uniforms::{
     CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat, v4,
@@ -25,45 +26,22 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
 
 /// Bind group layout of group 1 (`Object` + material maps), shared by shadow and lighting.
 pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let tex = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
+    let fragment = wgpu::ShaderStages::FRAGMENT;
+    let tex = |binding| {
+        util::float_texture_entry(binding, fragment, true, wgpu::TextureViewDimension::D2)
     };
+    let sampler =
+        |binding| util::sampler_entry(binding, fragment, wgpu::SamplerBindingType::Filtering);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("object"),
         entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            util::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
             tex(1),
             tex(2),
             tex(3),
-            wgpu::BindGroupLayoutEntry {
-                binding: 4,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
+            sampler(4),
             tex(5),
-            wgpu::BindGroupLayoutEntry {
-                binding: 6,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
+            sampler(6),
         ],
     })
 }

@@ -6,8 +6,8 @@
 use wgpu::util::DeviceExt;
 
 use crate::gpu::GpuContext;
-use crate::gpu_scene::{GpuObject, VERTEX_LAYOUT};
-use crate::passes::texture_space;
+use crate::gpu_scene::GpuObject;
+use crate::passes::{texture_space, util};
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
@@ -19,32 +19,6 @@ pub const SHADER: &str = concat!(
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
-
-fn target(
-    ctx: &GpuContext,
-    label: &str,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    })
-}
 
 /// What the lighting pass writes, and what screen-space SSS reads.
 pub struct LightingTargets {
@@ -63,30 +37,16 @@ pub struct LightingTargets {
 
 impl LightingTargets {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        let device = &ctx.device;
+        let target = |label, format| util::render_target(device, label, width, height, format);
         Self {
             width,
             height,
-            diffuse: target(ctx, "diffuse", width, height, RADIANCE_FORMAT),
-            specular: target(ctx, "specular", width, height, RADIANCE_FORMAT),
-            depth: target(ctx, "linear depth", width, height, DEPTH_FORMAT),
-            sss: target(ctx, "sss strength", width, height, SSS_FORMAT),
-            zbuffer: ctx
-                .device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("z-buffer"),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::Depth32Float,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default()),
+            diffuse: target("diffuse", RADIANCE_FORMAT),
+            specular: target("specular", RADIANCE_FORMAT),
+            depth: target("linear depth", DEPTH_FORMAT),
+            sss: target("sss strength", SSS_FORMAT),
+            zbuffer: util::depth_buffer(device, "z-buffer", width, height),
         }
     }
 }
@@ -136,46 +96,20 @@ impl LightingPass {
         tsm_atlas: &wgpu::TextureView,
     ) -> Self {
         let device = &ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lighting.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let uniform = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
+        let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
+        let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX_FRAGMENT);
+        // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
+        let atlas = |binding| {
+            util::float_texture_entry(
+                binding,
+                wgpu::ShaderStages::FRAGMENT,
+                false,
+                wgpu::TextureViewDimension::D2Array,
+            )
         };
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lighting frame"),
-            entries: &[
-                uniform(0),
-                uniform(1),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-            ],
+            entries: &[uniform(0), uniform(1), atlas(2), atlas(3)],
         });
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera"),
@@ -209,74 +143,41 @@ impl LightingPass {
                 },
             ],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lighting"),
-            bind_group_layouts: &[Some(&frame_layout), Some(object_layout), Some(maps_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lighting"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
+        let layout = util::pipeline_layout(
+            device,
+            "lighting",
+            &[&frame_layout, object_layout, maps_layout],
+        );
+        let pipeline = util::MeshPipeline {
+            label: "lighting",
+            layout: &layout,
+            module: &module,
+            vertex: "vs_main",
+            fragment: "fs_main",
+            targets: &[RADIANCE_FORMAT, RADIANCE_FORMAT, DEPTH_FORMAT, SSS_FORMAT],
             // Not culled: glTF skin meshes are often open (wrists, necks) and the shader flips
             // the normal of back faces.
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(RADIANCE_FORMAT.into()),
-                    Some(RADIANCE_FORMAT.into()),
-                    Some(DEPTH_FORMAT.into()),
-                    Some(SSS_FORMAT.into()),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let uv_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("texture_space.wgsl (irradiance)"),
-            source: wgpu::ShaderSource::Wgsl(texture_space::SHADER.into()),
-        });
-        let irradiance_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("texture-space irradiance"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &uv_module,
-                entry_point: Some("vs_irradiance"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
+            cull_mode: None,
+            depth_test: true,
+        }
+        .create(device);
+        let uv_module = util::wgsl_module(
+            device,
+            "texture_space.wgsl (irradiance)",
+            texture_space::SHADER,
+        );
+        let irradiance_pipeline = util::MeshPipeline {
+            label: "texture-space irradiance",
+            layout: &layout,
+            module: &uv_module,
+            vertex: "vs_irradiance",
+            fragment: "fs_irradiance",
+            targets: &[texture_space::MAP_FORMAT, texture_space::STRETCH_FORMAT],
             // UV islands may be laid out with either winding; no depth (one surface per texel).
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &uv_module,
-                entry_point: Some("fs_irradiance"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(texture_space::MAP_FORMAT.into()),
-                    Some(texture_space::STRETCH_FORMAT.into()),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            cull_mode: None,
+            depth_test: false,
+        }
+        .create(device);
         let default_maps = texture_space::default_maps_bind_group(device, maps_layout);
         Self {
             pipeline,
@@ -334,18 +235,7 @@ impl LightingPass {
             view(&targets.depth),
             view(&targets.sss),
         );
-        let clear = |c: wgpu::Color| wgpu::Operations {
-            load: wgpu::LoadOp::Clear(c),
-            store: wgpu::StoreOp::Store,
-        };
-        let attach = |v, c| {
-            Some(wgpu::RenderPassColorAttachment {
-                view: v,
-                depth_slice: None,
-                resolve_target: None,
-                ops: clear(c),
-            })
-        };
+        let attach = |v, c| util::color_attachment(v, wgpu::LoadOp::Clear(c));
         let bg = wgpu::Color {
             r: background[0] as f64,
             g: background[1] as f64,
@@ -370,14 +260,7 @@ impl LightingPass {
                     ),
                     attach(&sss, wgpu::Color::TRANSPARENT),
                 ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &targets.zbuffer,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: util::depth_attachment(&targets.zbuffer),
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,

@@ -8,6 +8,7 @@ pub mod sss;
 pub mod texture_space;
 pub mod tonemap;
 pub mod transmittance;
+pub mod util;
 
 /// Every WGSL program of the crate as compiled (name, full source). The naga unit test
 /// validates each of them without a GPU.

@@ -6,7 +6,8 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
+use crate::gpu_scene::{GpuObject, ShadowLayer};
+use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{ShadowViewUniform, mat, v4};
 
@@ -56,94 +57,39 @@ impl ShadowPass {
                 ),
             ));
         }
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shadow.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
+        let module = util::wgsl_module(device, "shadow.wgsl", SHADER);
         let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow view"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[util::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shadow"),
-            bind_group_layouts: &[Some(&view_layout), Some(object_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
+        let layout = util::pipeline_layout(device, "shadow", &[&view_layout, object_layout]);
+        let pipeline = util::MeshPipeline {
+            label: "shadow",
+            layout: &layout,
+            module: &module,
+            vertex: "vs_main",
+            fragment: "fs_main",
+            targets: &[FORMAT],
             // No culling: thickness needs the surface nearest the light whichever way it faces.
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            cull_mode: None,
+            depth_test: true,
+        }
+        .create(device);
         let layer_count = layers.len().max(1) as u32;
         let size = atlas_size.max(1);
-        let atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow atlas"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: layer_count,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+        let atlas = util::texture_2d(
+            device,
+            "shadow atlas",
+            size,
+            size,
+            layer_count,
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let atlas_view = atlas.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let depth = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("shadow depth"),
-                size: wgpu::Extent3d {
-                    width: size,
-                    height: size,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Depth32Float,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        );
+        let atlas_view = util::array_view(&atlas);
+        let depth = util::depth_buffer(device, "shadow depth", size, size);
         let layers = layers
             .iter()
             .enumerate()
@@ -162,12 +108,7 @@ impl ShadowPass {
                         resource: buffer.as_entire_binding(),
                     }],
                 });
-                let view = atlas.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i as u32,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                });
+                let view = util::layer_view(&atlas, i as u32);
                 (l.clone(), bg, view, buffer)
             })
             .collect();
@@ -215,29 +156,17 @@ impl ShadowPass {
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("shadow"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    // Empty texels read as infinitely far: nothing occludes there.
+                    color_attachments: &[util::color_attachment(
                         view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        // Empty texels read as infinitely far: nothing occludes there.
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: f32::MAX as f64,
-                                g: 0.0,
-                                b: 0.0,
-                                a: 0.0,
-                            }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &self.depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
+                        wgpu::LoadOp::Clear(wgpu::Color {
+                            r: f32::MAX as f64,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
                         }),
-                        stencil_ops: None,
-                    }),
+                    )],
+                    depth_stencil_attachment: util::depth_attachment(&self.depth),
                     timestamp_writes: timer.writes(),
                     occlusion_query_set: None,
                     multiview_mask: None,

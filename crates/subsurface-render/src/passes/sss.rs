@@ -25,6 +25,7 @@ use subsurface_profile::{
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
+use crate::passes::util;
 use crate::timing::TimedPass;
 
 pub const SHADER: &str = include_str!("sss.wgsl");
@@ -238,57 +239,29 @@ const P_RESOLVE: usize = 5;
 impl SssPass {
     pub fn new(device: &wgpu::Device, config: &SssConfig) -> Result<Self, RenderError> {
         config.validate()?;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("sss.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let tex = |binding, filterable| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
+        let module = util::wgsl_module(device, "sss.wgsl", SHADER);
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let tex = |binding, filterable| {
+            util::float_texture_entry(
+                binding,
+                fragment,
+                filterable,
+                wgpu::TextureViewDimension::D2,
+            )
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("sss"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                util::uniform_entry(0, fragment),
                 tex(1, false),
                 tex(2, false),
                 tex(3, false),
                 tex(5, false),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("sss"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout = util::pipeline_layout(device, "sss", &[&layout]);
         let replace = Some(wgpu::ColorTargetState::from(FORMAT));
-        let additive = Some(wgpu::ColorTargetState {
-            format: FORMAT,
-            blend: Some(wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::One,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent::REPLACE,
-            }),
-            write_mask: wgpu::ColorWrites::ALL,
-        });
+        let additive = Some(util::additive_target(FORMAT));
         let make = |entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
             super::fullscreen::pipeline(device, &module, Some(&pipeline_layout), entry, targets)
         };
@@ -300,22 +273,16 @@ impl SssPass {
             make("fs_copy", std::slice::from_ref(&replace)),
             make("fs_resolve", &[replace]),
         ];
-        let dummy = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("sss dummy"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let dummy = util::texture_2d(
+            device,
+            "sss dummy",
+            1,
+            1,
+            1,
+            FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )
+        .create_view(&Default::default());
         let mut pass = Self {
             config: config.clone(),
             layout,
@@ -447,18 +414,17 @@ impl SssPass {
     pub fn bind(&mut self, device: &wgpu::Device, inputs: &SssInputs<'_>) {
         let size = inputs.diffuse.size();
         let make_target = |label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            util::texture_2d(
+                device,
+                label,
+                size.width,
+                size.height,
+                size.depth_or_array_layers,
+                FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            })
+            )
         };
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let diffuse_view = view(inputs.diffuse);
@@ -601,17 +567,7 @@ impl SssPass {
         for s in &bound.steps {
             let timer = TimedPass::begin(profiler, s.label, encoder);
             {
-                let attach = |v| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: v,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                };
+                let attach = |v| util::color_attachment(v, wgpu::LoadOp::Load);
                 let accum_target = [
                     attach(&bound.targets[s.target]),
                     attach(&bound.targets[4.min(bound.targets.len() - 1)]),

@@ -30,8 +30,9 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
+use crate::gpu_scene::{GpuObject, ShadowLayer};
 use crate::passes::transmittance::MaterialCache;
+use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{BlurUniform, TextureSpaceUniform, TsmViewUniform, mat};
 
@@ -270,23 +271,7 @@ fn map_texture(
     size: u32,
     format: wgpu::TextureFormat,
 ) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    })
+    util::render_target(device, label, size, size, format)
 }
 
 const P_COPY: usize = 0;
@@ -340,56 +325,19 @@ const V_WIDEST: usize = 5;
 
 impl TextureBlur {
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("texture_space.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let tex = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
+        let module = util::wgsl_module(device, "texture_space.wgsl", SHADER);
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        // The stretch map is Rg32Float; the blur reads texels without a sampler anyway.
+        let tex = |binding| {
+            util::float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("texture-space blur"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 10,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                tex(11),
-                tex(12),
-                tex(13),
-            ],
+            entries: &[util::uniform_entry(10, fragment), tex(11), tex(12), tex(13)],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("texture-space blur"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout = util::pipeline_layout(device, "texture-space blur", &[&layout]);
         let replace = Some(wgpu::ColorTargetState::from(MAP_FORMAT));
-        let additive = Some(wgpu::ColorTargetState {
-            format: MAP_FORMAT,
-            blend: Some(wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::One,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent::REPLACE,
-            }),
-            write_mask: wgpu::ColorWrites::ALL,
-        });
+        let additive = Some(util::additive_target(MAP_FORMAT));
         let make = |entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(entry),
@@ -570,17 +518,8 @@ impl TextureBlur {
         for s in &targets.steps {
             let timer = TimedPass::begin(profiler, "texture", encoder);
             {
-                let attach = |i: usize| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: &targets.views[i],
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                };
+                let attach =
+                    |i: usize| util::color_attachment(&targets.views[i], wgpu::LoadOp::Load);
                 let two = [attach(s.targets[0]), attach(s.targets[1])];
                 let one = [attach(s.targets[0])];
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -605,37 +544,17 @@ impl TextureBlur {
 /// Layout of group 2 of the lighting pass (`TextureSpace`, `ts_result`, `ts_widest`,
 /// `ts_sampler` in lighting.wgsl).
 pub fn maps_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let tex = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
+    let fragment = wgpu::ShaderStages::FRAGMENT;
+    let tex = |binding| {
+        util::float_texture_entry(binding, fragment, true, wgpu::TextureViewDimension::D2)
     };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("texture-space maps"),
         entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            util::uniform_entry(0, fragment),
             tex(1),
             tex(2),
-            wgpu::BindGroupLayoutEntry {
-                binding: 3,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
+            util::sampler_entry(3, fragment, wgpu::SamplerBindingType::Filtering),
         ],
     })
 }
@@ -845,17 +764,8 @@ impl TextureSpacePass {
             let Some(m) = m else { continue };
             let timer = TimedPass::begin(profiler, "texture", encoder);
             {
-                let attach = |v| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: v,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                };
+                let attach =
+                    |v| util::color_attachment(v, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("texture-space irradiance"),
                     color_attachments: &[attach(&m.views[0]), attach(&m.views[1])],
@@ -886,25 +796,15 @@ pub struct TsmPass {
 
 /// A 1x1x1 translucent-shadow-map array for the lighting pass when TSM is off.
 pub fn dummy_tsm_view(device: &wgpu::Device) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("tsm dummy"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TSM_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        })
+    util::array_view(&util::texture_2d(
+        device,
+        "tsm dummy",
+        1,
+        1,
+        1,
+        TSM_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    ))
 }
 
 impl TsmPass {
@@ -915,77 +815,38 @@ impl TsmPass {
         atlas_size: u32,
     ) -> Self {
         let device = &ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("texture_space.wgsl (tsm)"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
+        let module = util::wgsl_module(device, "texture_space.wgsl (tsm)", SHADER);
         let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tsm view"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 14,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[util::uniform_entry(14, wgpu::ShaderStages::VERTEX)],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tsm"),
-            bind_group_layouts: &[Some(&view_layout), Some(object_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("tsm"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_tsm"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_tsm"),
-                compilation_options: Default::default(),
-                targets: &[Some(TSM_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let layout = util::pipeline_layout(device, "tsm", &[&view_layout, object_layout]);
+        let pipeline = util::MeshPipeline {
+            label: "tsm",
+            layout: &layout,
+            module: &module,
+            vertex: "vs_tsm",
+            fragment: "fs_tsm",
+            targets: &[TSM_FORMAT],
+            // As the shadow maps: the surface nearest the light, whichever way it faces.
+            cull_mode: None,
+            depth_test: true,
+        }
+        .create(device);
         let size = atlas_size.max(1);
-        let atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("translucent shadow maps"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: layers.len().max(1) as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TSM_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+        let atlas = util::texture_2d(
+            device,
+            "translucent shadow maps",
+            size,
+            size,
+            layers.len().max(1) as u32,
+            TSM_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let atlas_view = atlas.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let depth = map_texture_depth(device, size);
+        );
+        let atlas_view = util::array_view(&atlas);
+        let depth = util::depth_buffer(device, "tsm depth", size, size);
         let layers = layers
             .iter()
             .enumerate()
@@ -1005,12 +866,7 @@ impl TsmPass {
                         resource: buffer.as_entire_binding(),
                     }],
                 });
-                let view = atlas.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i as u32,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                });
+                let view = util::layer_view(&atlas, i as u32);
                 (l.size, buffer, bg, view)
             })
             .collect();
@@ -1045,28 +901,16 @@ impl TsmPass {
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("tsm"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    color_attachments: &[util::color_attachment(
                         view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: -1.0,
-                                g: -1.0,
-                                b: 0.0,
-                                a: 0.0,
-                            }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &self.depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
+                        wgpu::LoadOp::Clear(wgpu::Color {
+                            r: -1.0,
+                            g: -1.0,
+                            b: 0.0,
+                            a: 0.0,
                         }),
-                        stencil_ops: None,
-                    }),
+                    )],
+                    depth_stencil_attachment: util::depth_attachment(&self.depth),
                     timestamp_writes: timer.writes(),
                     occlusion_query_set: None,
                     multiview_mask: None,
@@ -1082,25 +926,6 @@ impl TsmPass {
             timer.end(profiler, encoder);
         }
     }
-}
-
-fn map_texture_depth(device: &wgpu::Device, size: u32) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("tsm depth"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Depth32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use wgpu::util::DeviceExt;
 
+use crate::passes::util;
 use crate::timing::TimedPass;
 
 pub const SHADER: &str = include_str!("tonemap.wgsl");
@@ -84,44 +85,22 @@ pub struct ToneMapPass {
 impl ToneMapPass {
     /// `output_format` is the format of the view given to `encode` (e.g. a swapchain format).
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("tonemap.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let tex = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
+        let module = util::wgsl_module(device, "tonemap.wgsl", SHADER);
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let tex = |binding| {
+            util::float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                util::uniform_entry(0, fragment),
                 tex(1),
                 tex(2),
                 tex(3),
                 tex(4),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tonemap"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout = util::pipeline_layout(device, "tonemap", &[&layout]);
         let pipeline = super::fullscreen::pipeline(
             device,
             &module,
@@ -215,15 +194,7 @@ impl ToneMapPass {
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("tonemap"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: output,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[util::color_attachment(output, load)],
                 depth_stencil_attachment: None,
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,
