@@ -254,11 +254,15 @@ fn regression_guard_against_committed_references() {
                 "{name}: region {region} mean error {got:+.3} vs recorded {want:+.3}"
             );
         }
+        // Better than no scattering and no transmittance: worse on neither measure, better
+        // on at least one. (Where the reference's noise exceeds every method's error, as on
+        // the front-lit head at 256 spp, the noise-corrected RMSE is 0 for all of them and
+        // FLIP decides; on the backlit sphere FLIP ties and the RMSE decides.)
+        let (rg, rb) = (f(&good, "rmse_debiased"), f(&base, "rmse_debiased"));
+        let (fg, fb) = (f(&good, "flip_mean"), f(&base, "flip_mean"));
         assert!(
-            f(&good, "rmse_debiased") < f(&base, "rmse_debiased"),
-            "{name}: separable+paper noise-corrected RMSE {} not below none+off {}",
-            f(&good, "rmse_debiased"),
-            f(&base, "rmse_debiased")
+            rg <= rb && fg <= fb + 1e-4 && (rg < rb || fg < fb),
+            "{name}: separable+paper (noise-corrected RMSE {rg}, FLIP {fg}) not better than none+off ({rb}, {fb})"
         );
         // What FLIP sees is what `subsurface render` writes (CPU tone map = GPU tone map).
         assert!(
