@@ -88,10 +88,9 @@ pub struct Renderer {
     lighting: LightingPass,
     sss: SssPass,
     copy: Option<CopyPass>,
-    tonemap: ToneMapPass,
-    tonemap_bind_group: wgpu::BindGroup,
-    /// Tone-map passes for other output formats (a window's swapchain), by format.
-    extra_tonemaps: Vec<(wgpu::TextureFormat, ToneMapPass, wgpu::BindGroup)>,
+    /// One tone-map pass per output format: `OUTPUT_FORMAT` first (PNGs), then those of
+    /// the views given to `encode_to_view` (a window's swapchain).
+    tonemaps: Vec<ToneMapTarget>,
     output: wgpu::Texture,
     profiler: GpuProfiler,
     background: [f32; 3],
@@ -189,6 +188,17 @@ fn output_texture(ctx: &GpuContext, w: u32, h: u32) -> wgpu::Texture {
     })
 }
 
+/// A tone-map pass for one output format and what it draws from.
+struct ToneMapTarget {
+    format: wgpu::TextureFormat,
+    pass: ToneMapPass,
+    /// The lighting targets.
+    frame: wgpu::BindGroup,
+    /// The UV-space irradiance map in place of diffuse: only with `DebugView::Irradiance` and
+    /// texture-space diffusion, rebuilt by `update` (the maps may have been recreated).
+    irradiance: Option<wgpu::BindGroup>,
+}
+
 fn tonemap_inputs<'a>(views: &'a [wgpu::TextureView; 4]) -> ToneMapInputs<'a> {
     ToneMapInputs {
         diffuse: &views[0],
@@ -246,7 +256,6 @@ impl Renderer {
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
         let targets = LightingTargets::new(ctx, options.width, options.height);
-        let tonemap = ToneMapPass::new(device, tonemap::OUTPUT_FORMAT);
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.sss)?;
         sss.bind(
@@ -258,14 +267,13 @@ impl Renderer {
             },
         );
         sss.set_camera(&ctx.queue, camera.params[2]);
-        let tonemap_bind_group = tonemap.bind(device, &tonemap_inputs(&views));
         let output = output_texture(ctx, options.width, options.height);
         let profiler = timing::new_profiler(device)?;
         let copy = options
             .baseline_copy
             .then(|| CopyPass::new(device, &targets.diffuse));
         ctx.check()?;
-        Ok(Self {
+        let mut renderer = Self {
             ctx: ctx.clone(),
             targets,
             object_layout,
@@ -274,9 +282,7 @@ impl Renderer {
             lighting,
             copy,
             sss,
-            tonemap,
-            tonemap_bind_group,
-            extra_tonemaps: Vec::new(),
+            tonemaps: Vec::new(),
             output,
             profiler,
             background: scene.desc.render.background,
@@ -294,7 +300,9 @@ impl Renderer {
             tsm,
             tsm_dummy,
             options,
-        })
+        };
+        renderer.add_tonemap(tonemap::OUTPUT_FORMAT);
+        Ok(renderer)
     }
 
     /// Applies a changed scene description (camera, lights, materials, transforms) and
@@ -397,7 +405,6 @@ impl Renderer {
         if resized {
             self.targets = LightingTargets::new(&self.ctx, options.width, options.height);
             self.output = output_texture(&self.ctx, options.width, options.height);
-            self.extra_tonemaps.clear();
         }
         let views = target_views(&self.targets);
         if resized || options.sss != self.options.sss {
@@ -412,9 +419,6 @@ impl Renderer {
             );
         }
         self.sss.set_camera(&queue, camera.params[2]);
-        if resized {
-            self.tonemap_bind_group = self.tonemap.bind(&device, &tonemap_inputs(&views));
-        }
         if resized || options.baseline_copy != self.copy.is_some() {
             self.copy = options
                 .baseline_copy
@@ -423,6 +427,12 @@ impl Renderer {
         self.background = scene.desc.render.background;
         self.far = scene.desc.camera.far;
         self.options = options.clone();
+        for i in 0..self.tonemaps.len() {
+            if resized {
+                self.tonemaps[i].frame = self.frame_bind_group(&self.tonemaps[i].pass);
+            }
+            self.tonemaps[i].irradiance = self.irradiance_bind_group(&self.tonemaps[i].pass);
+        }
         self.ctx.check()
     }
 
@@ -488,34 +498,64 @@ impl Renderer {
         (0..self.objects.len()).find_map(|i| self.texture_space.object_maps(i).map(|m| m.0))
     }
 
-    /// Writes the tone-map parameters of `pass` and returns the bind group to draw with:
-    /// `default` or, for the irradiance view, one that reads the UV-space map.
-    fn prepare_tonemap(&self, pass: &ToneMapPass, default: &wgpu::BindGroup) -> wgpu::BindGroup {
-        let o = &self.options;
-        let Some(map) = self.irradiance_map() else {
-            pass.set_params(&self.ctx.queue, o.exposure_ev, o.view, self.far);
-            return default.clone();
-        };
-        pass.set_params_with(&self.ctx.queue, o.exposure_ev, 0.0, self.far, true);
-        // A debug view: one bind group per frame is cheap next to the texture-space passes.
-        let views = target_views(&self.targets);
-        let map_view = map.create_view(&Default::default());
+    /// What a tone-map pass normally draws from: the lighting targets.
+    fn frame_bind_group(&self, pass: &ToneMapPass) -> wgpu::BindGroup {
         pass.bind(
+            &self.ctx.device,
+            &tonemap_inputs(&target_views(&self.targets)),
+        )
+    }
+
+    /// The irradiance map in place of diffuse, when the irradiance view shows one.
+    fn irradiance_bind_group(&self, pass: &ToneMapPass) -> Option<wgpu::BindGroup> {
+        let map_view = self.irradiance_map()?.create_view(&Default::default());
+        let views = target_views(&self.targets);
+        Some(pass.bind(
             &self.ctx.device,
             &ToneMapInputs {
                 diffuse: &map_view,
                 ..tonemap_inputs(&views)
             },
-        )
+        ))
+    }
+
+    fn add_tonemap(&mut self, format: wgpu::TextureFormat) {
+        let pass = ToneMapPass::new(&self.ctx.device, format);
+        self.tonemaps.push(ToneMapTarget {
+            format,
+            frame: self.frame_bind_group(&pass),
+            irradiance: self.irradiance_bind_group(&pass),
+            pass,
+        });
+    }
+
+    /// Records the scene and then `target`'s tone map into `view`.
+    fn encode_with(
+        &self,
+        target: &ToneMapTarget,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &wgpu::TextureView,
+        scissor: Option<[u32; 4]>,
+    ) {
+        let o = &self.options;
+        target.pass.set_params_with(
+            &self.ctx.queue,
+            o.exposure_ev,
+            o.view,
+            self.far,
+            target.irradiance.is_some(),
+        );
+        self.encode_scene(encoder);
+        let bind_group = target.irradiance.as_ref().unwrap_or(&target.frame);
+        target
+            .pass
+            .encode_scissored(encoder, bind_group, view, scissor, Some(&self.profiler));
     }
 
     /// Records one whole frame into `encoder`, ending with the tone-mapped `output` texture.
     pub fn encode_frame(&self, encoder: &mut wgpu::CommandEncoder) {
-        let bind_group = self.prepare_tonemap(&self.tonemap, &self.tonemap_bind_group);
-        self.encode_scene(encoder);
         let out = self.output.create_view(&Default::default());
-        self.tonemap
-            .encode(encoder, &bind_group, &out, Some(&self.profiler));
+        self.encode_with(&self.tonemaps[0], encoder, &out, None);
     }
 
     /// Records a whole frame tone-mapped into `view` (e.g. a window's swapchain texture of
@@ -529,22 +569,15 @@ impl Renderer {
         format: wgpu::TextureFormat,
         scissor: Option<[u32; 4]>,
     ) {
-        if !self.extra_tonemaps.iter().any(|(f, _, _)| *f == format) {
-            let pass = ToneMapPass::new(&self.ctx.device, format);
-            let bg = pass.bind(
-                &self.ctx.device,
-                &tonemap_inputs(&target_views(&self.targets)),
-            );
-            self.extra_tonemaps.push((format, pass, bg));
+        if !self.tonemaps.iter().any(|t| t.format == format) {
+            self.add_tonemap(format);
         }
-        let (_, pass, bg) = self
-            .extra_tonemaps
+        let target = self
+            .tonemaps
             .iter()
-            .find(|(f, _, _)| *f == format)
-            .expect("inserted above");
-        let bg = self.prepare_tonemap(pass, bg);
-        self.encode_scene(encoder);
-        pass.encode_scissored(encoder, &bg, view, scissor, Some(&self.profiler));
+            .find(|t| t.format == format)
+            .expect("added above");
+        self.encode_with(target, encoder, view, scissor);
     }
 
     /// After `encode_to_view` or `encode_frame`: resolves this frame's timestamp queries into

@@ -382,14 +382,12 @@ fn head_seams_are_not_dark() {
     );
 }
 
-/// TSM: a small sphere (4 mm across) lit from behind transmits the back side's blurred
-/// irradiance; lit from the front, TSM adds nothing where the light sees the surface.
-#[test]
-fn tsm_transmits_through_a_backlit_sphere() {
-    let Some(ctx) = context() else { return };
-    let scene_with_light = |z: f32| {
-        common::scene(&format!(
-            r#"
+/// A 4 mm skin sphere seen from 3 cm, lit by one shadowed directional light from `light`
+/// (towards the origin), no ambient light.
+fn small_sphere(light: [f32; 3]) -> Scene {
+    let [x, y, z] = light;
+    common::scene(&format!(
+        r#"
         [camera]
         position = [0.0, 0.0, 0.03]
         target = [0.0, 0.0, 0.0]
@@ -401,7 +399,7 @@ fn tsm_transmits_through_a_backlit_sphere() {
         normal_shrink = 0.0001
         [[lights]]
         kind = "directional"
-        position = [0.0, 0.0, {z}]
+        position = [{x:?}, {y:?}, {z:?}]
         target = [0.0, 0.0, 0.0]
         intensity = 1.0
         shadow_map_size = 512
@@ -413,8 +411,15 @@ fn tsm_transmits_through_a_backlit_sphere() {
         albedo = [1.0, 1.0, 1.0]
         specular = 0.0
         "#
-        ))
-    };
+    ))
+}
+
+/// TSM: a small sphere (4 mm across) lit from behind transmits the back side's blurred
+/// irradiance; lit from the front, TSM adds nothing where the light sees the surface.
+#[test]
+fn tsm_transmits_through_a_backlit_sphere() {
+    let Some(ctx) = context() else { return };
+    let scene_with_light = |z: f32| small_sphere([0.0, 0.0, z]);
     let render = |scene: &Scene, method: TransmittanceMethod| {
         let mut opts = RenderOptions::from_scene(scene);
         opts.width = 64;
@@ -461,30 +466,7 @@ fn tsm_transmits_through_a_backlit_sphere() {
 #[test]
 fn irradiance_view_shows_the_uv_map() {
     let Some(ctx) = context() else { return };
-    let scene = common::scene(
-        r#"
-        [camera]
-        position = [0.0, 0.0, 0.03]
-        target = [0.0, 0.0, 0.0]
-        fov_y_deg = 20.0
-        near = 0.005
-        far = 1.0
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        [[lights]]
-        kind = "directional"
-        position = [1.0, 0.5, 1.0]
-        target = [0.0, 0.0, 0.0]
-        intensity = 1.0
-        shadow_map_size = 512
-        [[objects]]
-        mesh = { shape = "sphere", radius = 0.002, segments = 32 }
-        mm_per_unit = 1000.0
-        [objects.material]
-        albedo = [1.0, 1.0, 1.0]
-        specular = 0.0
-        "#,
-    );
+    let scene = small_sphere([1.0, 0.5, 1.0]);
     let (w, h, size) = (128u32, 64u32, 64u32);
     let mut opts = RenderOptions::from_scene(&scene);
     opts.width = w;

@@ -63,3 +63,12 @@ fn light_distance(light_pos: vec4<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> f
     }
     return length(p - light_pos.xyz);
 }
+
+// Unit vector from p towards the light (the light's own direction reversed for directional
+// lights, which are infinitely far).
+fn light_direction(light_pos: vec4<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    if (light_pos.w == KIND_DIRECTIONAL) {
+        return -light_dir;
+    }
+    return normalize(light_pos.xyz - p);
+}

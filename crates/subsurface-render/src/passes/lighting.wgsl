@@ -180,15 +180,11 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     let count = min(lights.count.x, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
-        var l: vec3<f32>;
+        let l = light_direction(light.position, light.direction.xyz, world);
         var attenuation = 1.0;
-        if (light.position.w == KIND_DIRECTIONAL) {
-            l = -light.direction.xyz;
-        } else {
+        if (light.position.w != KIND_DIRECTIONAL) {
             let to_light = light.position.xyz - world;
-            let dist2 = max(dot(to_light, to_light), 1e-8);
-            l = to_light * inverseSqrt(dist2);
-            attenuation = 1.0 / dist2;
+            attenuation = 1.0 / max(dot(to_light, to_light), 1e-8);
         }
         var spot = 1.0;
         if (light.position.w == KIND_SPOT) {

@@ -144,16 +144,16 @@ impl ToneMapPass {
 
     /// Sets exposure (in EV), the debug view and the far plane (for the depth view).
     pub fn set_params(&self, queue: &wgpu::Queue, exposure_ev: f32, view: DebugView, far: f32) {
-        self.set_params_with(queue, exposure_ev, view.code(), far, false);
+        self.set_params_with(queue, exposure_ev, view, far, false);
     }
 
-    /// As `set_params`; with `letterbox`, `diffuse` may be any size (a UV-space map) and is
-    /// shown as a centred square, the rest black.
+    /// As `set_params`; with `letterbox`, the bound `diffuse` may be any size (a UV-space
+    /// map) and is shown as a centred square, the rest black, whatever the view.
     pub fn set_params_with(
         &self,
         queue: &wgpu::Queue,
         exposure_ev: f32,
-        code: f32,
+        view: DebugView,
         far: f32,
         letterbox: bool,
     ) {
@@ -161,7 +161,7 @@ impl ToneMapPass {
         queue.write_buffer(
             &self.params,
             0,
-            bytemuck::cast_slice(&[exposure_ev.exp2(), code, far, flags]),
+            bytemuck::cast_slice(&[exposure_ev.exp2(), view.code(), far, flags]),
         );
     }
 

@@ -89,10 +89,7 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     let count = min(lights.count.x, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
-        var l = -light.direction.xyz;
-        if (light.position.w != KIND_DIRECTIONAL) {
-            l = normalize(light.position.xyz - p);
-        }
+        let l = light_direction(light.position, light.direction.xyz, p);
         if (back_irradiance(n_vertex, l) <= 0.0) {
             continue;
         }
