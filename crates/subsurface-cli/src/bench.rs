@@ -5,15 +5,14 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use glam::{Mat4, Vec3};
 use plotters::prelude::*;
 use serde::Serialize;
-use subsurface_render::passes::sss::SssMethod;
-use subsurface_render::passes::transmittance::TransmittanceMethod;
-use subsurface_render::{GpuContext, PassTiming, Renderer, Scene};
+use subsurface_render::{
+    GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod,
+};
 
 use crate::output::PendingFile;
-use crate::render::{SssArg, TransmittanceArg, load_scene, options};
+use crate::settings_args::{load_scene, replicate};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -35,18 +34,28 @@ pub struct BenchArgs {
     /// same screen area at every count), comma-separated.
     #[arg(long, default_value = "1", value_delimiter = ',')]
     pub characters: Vec<u32>,
-    /// SSS methods to measure, comma-separated.
+    /// SSS methods to measure, comma-separated (none, gaussian6, separable, hable13, texture).
     #[arg(
         long,
-        value_enum,
         value_delimiter = ',',
-        default_value = "none,separable,gaussian6,hable13"
+        default_value = "none,separable,gaussian6,hable13",
+        value_name = "METHOD,.."
     )]
-    pub sss: Vec<SssArg>,
+    pub sss: Vec<SssMethod>,
     /// Transmittance methods to measure, comma-separated (e.g. paper,off for the cost of
     /// transmittance side by side).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "paper")]
-    pub transmittance: Vec<TransmittanceArg>,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "paper",
+        value_name = "METHOD,.."
+    )]
+    pub transmittance: Vec<TransmittanceMethod>,
+    /// Numbers of distinct diffusion profiles on screen, comma-separated: the objects (with
+    /// --characters, the copies) take the material presets in turn, so the cost of a profile
+    /// per material shows beside one profile for all.
+    #[arg(long, default_value = "1", value_delimiter = ',', value_name = "N,..")]
+    pub profiles: Vec<u32>,
     /// Separable kernel taps.
     #[arg(long, default_value_t = 17, value_name = "N")]
     pub samples: u32,
@@ -79,6 +88,8 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 #[derive(Serialize)]
 struct Run {
     characters: u32,
+    /// Rows of the screen-space profile table (distinct profiles on screen).
+    profiles: u32,
     width: u32,
     height: u32,
     sss: &'static str,
@@ -113,37 +124,33 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// `n` copies of the scene's objects on a grid of ceil(sqrt(n)) columns, each scaled by
-/// 1/columns about the scene's centre, so the grid covers about the area of one character.
-pub fn replicate(scene: &Scene, n: u32) -> Scene {
+/// Gives the scattering objects `n` distinct profiles in turn: the material presets (skin
+/// first), then skin again with a slightly different kernel strength for each further one, so
+/// that every one is its own row of the profile table.
+fn distinct_profiles(scene: &mut Scene, n: u32) {
     if n <= 1 {
-        return scene.clone();
+        return;
     }
-    let (lo, hi) = scene.bounds();
-    let centre = (lo + hi) * 0.5;
-    let size = hi - lo;
-    let cols = (n as f32).sqrt().ceil() as u32;
-    let rows = n.div_ceil(cols);
-    let s = 1.0 / cols as f32;
-    let mut out = scene.clone();
-    out.objects.clear();
-    for k in 0..n {
-        let (c, r) = (k % cols, k / cols);
-        let cell = Vec3::new(
-            (c as f32 + 0.5) / cols as f32 - 0.5,
-            0.5 - (r as f32 + 0.5) / rows.max(cols) as f32,
-            0.0,
-        ) * Vec3::new(size.x, size.y, 0.0);
-        let m = Mat4::from_translation(centre + cell)
-            * Mat4::from_scale(Vec3::splat(s))
-            * Mat4::from_translation(-centre);
-        for o in &scene.objects {
-            let mut copy = o.clone();
-            copy.transform = m * o.transform;
-            out.objects.push(copy);
+    let names = subsurface_profile::material_names();
+    let mut k = 0usize;
+    for i in 0..scene.objects.len() {
+        if scene.objects[i].material.sss_strength <= 0.0 {
+            continue;
         }
+        let p = k % n as usize;
+        k += 1;
+        let edit = |m: &mut subsurface_render::scene::MaterialDesc| {
+            if p < names.len() {
+                m.profile = names[p].to_string();
+            } else {
+                m.profile = "skin".into();
+                let s = 1.0 - 0.01 * p as f32;
+                m.kernel_strength = Some([0.48 * s, 0.41 * s, 0.28 * s]);
+            }
+        };
+        edit(&mut scene.objects[i].material);
+        edit(&mut scene.desc.objects[i].material);
     }
-    out
 }
 
 /// Passes that belong to subsurface scattering (screen or texture space).
@@ -182,27 +189,41 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         .as_ref()
         .map(|p| PendingFile::create(p))
         .transpose()?;
-    let configs = sizes.len() * args.characters.len() * args.sss.len() * args.transmittance.len();
+    for &p in &args.profiles {
+        anyhow::ensure!(
+            (1..=256).contains(&p),
+            "--profiles: each must be in 1..=256 (got {p})"
+        );
+    }
+    let configs = sizes.len()
+        * args.characters.len()
+        * args.profiles.len()
+        * args.sss.len()
+        * args.transmittance.len();
     let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
         .with_style(
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
                 .expect("static template"),
         );
     let mut runs = Vec::new();
-    for &n in &args.characters {
-        let scene = replicate(&base, n);
+    for (&n, &profiles) in args
+        .characters
+        .iter()
+        .flat_map(|n| args.profiles.iter().map(move |p| (n, p)))
+    {
+        let mut scene = replicate(&base, n);
+        distinct_profiles(&mut scene, profiles);
         for &(w, h) in &sizes {
             ctx.check_size("--sizes ", w, h)?;
             for &method in &args.sss {
                 for &tm in &args.transmittance {
-                    let method: SssMethod = method.into();
-                    let tm: TransmittanceMethod = tm.into();
-                    bar.set_message(format!("{n} x {w}x{h} {} {tm:?}", method.name()));
-                    let mut opts = options(&scene, Some(w), Some(h), None)?;
-                    opts.sss = subsurface_render::passes::sss::SssConfig::for_scene(&scene);
-                    opts.sss.method = method;
-                    opts.sss.samples = args.samples;
-                    opts.transmittance.method = tm;
+                    bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
+                    let mut opts = RenderOptions::from_scene(&scene);
+                    let s = &mut opts.settings;
+                    (s.width, s.height) = (w, h);
+                    s.sss.method = method;
+                    s.sss.samples = args.samples;
+                    s.transmittance.method = tm;
                     opts.baseline_copy = true;
                     let mut renderer =
                         Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
@@ -214,7 +235,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         }
                         bar.inc(1);
                     }
-                    runs.push(summarise(samples, n, w, h, method, tm));
+                    let mut run = summarise(samples, n, w, h, method, tm);
+                    run.profiles = renderer.profile_table().kernels.len() as u32;
+                    runs.push(run);
                 }
             }
         }
@@ -281,10 +304,11 @@ fn summarise(
         .sum();
     Run {
         characters: n,
+        profiles: 1,
         width: w,
         height: h,
         sss: method.name(),
-        transmittance: format!("{tm:?}").to_lowercase(),
+        transmittance: tm.name().to_string(),
         frame_ms,
         passes,
         copy_ms,
@@ -298,8 +322,17 @@ fn print_table(report: &Report) {
         report.adapter, report.frames, report.warmup
     );
     println!(
-        "{:>5} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}",
-        "chars", "size", "sss", "transm.", "frame ms", "shadow", "lighting", "sss ms", "sss/copy"
+        "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}",
+        "chars",
+        "profiles",
+        "size",
+        "sss",
+        "transm.",
+        "frame ms",
+        "shadow",
+        "lighting",
+        "sss ms",
+        "sss/copy"
     );
     for r in &report.runs {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
@@ -310,8 +343,9 @@ fn print_table(report: &Report) {
             .map(|p| p.ms)
             .fold(0.0, |a, b| a + b);
         println!(
-            "{:>5} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}",
+            "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}",
             r.characters,
+            r.profiles,
             format!("{}x{}", r.width, r.height),
             r.sss,
             r.transmittance,

@@ -31,7 +31,7 @@ pub struct KernelArgs {
     /// Per-channel share of light that is scattered, each in 0..=1, as "R,G,B" or one value
     /// for all channels. 0 keeps the pixel sharp. [default: 0.48,0.41,0.28, or 1,1,1 with --material]
     #[arg(long, value_name = "R,G,B")]
-    pub strength: Option<String>,
+    pub kernel_strength: Option<String>,
 
     /// Per-channel width factor, each >= 0, as "R,G,B" or one value: the profile radius is
     /// divided by 0.001 + falloff, so smaller values blur that channel less.
@@ -85,7 +85,12 @@ pub struct ProfileArgs {
 
 /// Prefixes a library error, whose message starts with the field name, with `--`.
 fn flag_error(e: ProfileError) -> anyhow::Error {
-    anyhow!("--{e}")
+    // The kernel's `strength` is the materials' `kernel_strength`: one name everywhere.
+    let msg = e.to_string();
+    match msg.strip_prefix("strength") {
+        Some(rest) => anyhow!("--kernel-strength{rest}"),
+        None => anyhow!("--{msg}"),
+    }
 }
 
 /// Parses "R,G,B" (or a single value for all three) for `--flag`.
@@ -129,8 +134,8 @@ pub fn build_kernel(args: &KernelArgs) -> Result<Vec<[f32; 4]>> {
         None => (DEFAULT_STRENGTH, DEFAULT_FALLOFF),
         Some(_) => ([1.0; 3], [1.0; 3]),
     };
-    let strength = match &args.strength {
-        Some(s) => parse_rgb("strength", s)?,
+    let strength = match &args.kernel_strength {
+        Some(s) => parse_rgb("kernel-strength", s)?,
         None => strength0,
     };
     let falloff = match &args.falloff {
@@ -482,7 +487,7 @@ mod tests {
     fn kernel_args(samples: u32) -> KernelArgs {
         KernelArgs {
             samples,
-            strength: None,
+            kernel_strength: None,
             falloff: None,
             material: None,
             gaussians: 6,
@@ -503,7 +508,7 @@ mod tests {
     #[test]
     fn kernel_flags_are_parsed_and_checked() {
         let mut a = kernel_args(9);
-        a.strength = Some("1, 1,1".into());
+        a.kernel_strength = Some("1, 1,1".into());
         a.falloff = Some("0.5".into());
         let k = build_kernel(&a).unwrap();
         let s: f32 = k.iter().map(|t| t[1]).sum();
@@ -511,13 +516,16 @@ mod tests {
 
         let e = build_kernel(&kernel_args(4)).unwrap_err().to_string();
         assert_eq!(e, "--samples: must be odd and in 3..=63 (got 4)");
-        a.strength = Some("1,2".into());
+        a.kernel_strength = Some("1,2".into());
         let e = build_kernel(&a).unwrap_err().to_string();
-        assert!(e.starts_with("--strength: expected R,G,B"), "{e}");
-        a.strength = Some("0.5,1.5,0.5".into());
+        assert!(e.starts_with("--kernel-strength: expected R,G,B"), "{e}");
+        a.kernel_strength = Some("0.5,1.5,0.5".into());
         let e = build_kernel(&a).unwrap_err().to_string();
-        assert!(e.starts_with("--strength.g: must be in 0..=1"), "{e}");
-        a.strength = None;
+        assert!(
+            e.starts_with("--kernel-strength.g: must be in 0..=1"),
+            "{e}"
+        );
+        a.kernel_strength = None;
         a.falloff = Some("nan,1,1".into());
         assert!(
             build_kernel(&a)

@@ -15,10 +15,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde::{Deserialize, Serialize};
-use subsurface_render::{GpuContext, Renderer};
+use subsurface_render::{GpuContext, RenderOptions, Renderer};
 
 use crate::output::PendingFile;
-use crate::render::{SssArgs, TransmittanceArgs};
+use crate::settings_args::{SettingsArgs, load_scene};
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
@@ -37,13 +37,10 @@ pub struct CompareArgs {
     /// Print the results as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Exposure in EV added to the scene's, for the tone-mapped images (FLIP, side-by-side).
-    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
+    /// The settings to render with (--exposure-ev also sets the exposure of the tone-mapped
+    /// images that FLIP and the side-by-side image compare).
     #[command(flatten)]
-    pub sss: SssArgs,
-    #[command(flatten)]
-    pub transmittance: TransmittanceArgs,
+    pub settings: SettingsArgs,
 }
 
 /// A named rectangle in normalised image coordinates (0..1, origin top left); its pixels are
@@ -480,17 +477,16 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     let (rw, rh, reference) = read_reference(&args.reference)?;
     let stderr = read_stderr(&args.reference, rw, rh)?;
     let regions = load_regions(args)?;
-    let mut scene = crate::render::load_scene(args.scene.as_ref(), None)?;
-    let mut opts = crate::render::options(&scene, None, None, args.exposure)?;
+    let mut scene = load_scene(args.scene.as_ref(), None)?;
+    args.settings.apply(&mut scene)?;
+    let opts = RenderOptions::from_scene(&scene);
     anyhow::ensure!(
-        (rw, rh) == (opts.width, opts.height),
+        (rw, rh) == (opts.width(), opts.height()),
         "{}: the reference is {rw}x{rh} but the scene renders {}x{}",
         args.reference.display(),
-        opts.width,
-        opts.height
+        opts.width(),
+        opts.height()
     );
-    opts.sss = args.sss.apply(&mut scene)?;
-    opts.transmittance = args.transmittance.config(&scene)?;
     let pending = PendingFile::create(&args.out)?;
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene, opts.clone())?;
@@ -503,7 +499,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .zip(&specular)
         .map(|(d, s)| [d[0] + s[0], d[1] + s[1], d[2] + s[2]])
         .collect();
-    let (w, h) = (opts.width, opts.height);
+    let (w, h) = (opts.width(), opts.height());
     let n = (w * h) as usize;
 
     // RMSE of linear radiance.
@@ -582,8 +578,8 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     }
 
     // FLIP on the tone-mapped images.
-    let ours_ldr = tone_map(&ours, opts.exposure_ev, w, h);
-    let ref_ldr = tone_map(&reference, opts.exposure_ev, w, h);
+    let ours_ldr = tone_map(&ours, opts.settings.exposure_ev, w, h);
+    let ref_ldr = tone_map(&reference, opts.settings.exposure_ev, w, h);
     let check = ours_ldr
         .pixels()
         .zip(frame.image.pixels())
@@ -619,8 +615,8 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             .scene
             .as_ref()
             .map_or("(default scene)".into(), |p| p.display().to_string()),
-        sss: serde_json::to_value(opts.sss.method)?,
-        transmittance: serde_json::to_value(opts.transmittance.method)?,
+        sss: serde_json::to_value(opts.settings.sss.method)?,
+        transmittance: serde_json::to_value(opts.settings.transmittance.method)?,
         width: w,
         height: h,
         rmse: rmse as f32,

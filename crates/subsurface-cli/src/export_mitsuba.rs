@@ -383,7 +383,7 @@ pub fn export(
 }
 
 pub fn run(args: &ExportArgs) -> Result<()> {
-    let scene = crate::render::load_scene(args.scene.as_ref(), None)?;
+    let scene = crate::settings_args::load_scene(args.scene.as_ref(), None)?;
     let width = args.width.unwrap_or(scene.desc.render.width);
     let height = args.height.unwrap_or(scene.desc.render.height);
     let warnings = export(&scene, &args.out, width, height, args.spp, args.max_depth)?;

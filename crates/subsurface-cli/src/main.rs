@@ -6,6 +6,7 @@ mod compare;
 mod export_mitsuba;
 mod output;
 mod render;
+mod settings_args;
 mod view;
 
 use std::process::ExitCode;
@@ -50,7 +51,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_exit(&e),
+    };
     // wgpu_hal reports adapters it could not open (e.g. EGL without a display) as errors
     // even when another backend works; they are noise unless debugging (-vv).
     let level = match cli.verbose {
@@ -73,10 +77,105 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // One line: the context chain joined with ": ", never a backtrace.
-            let msg = format!("{e:#}").replace('\n', " ");
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", one_line(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `--help` and `--version` print as usual; every other parse error becomes the same single
+/// `error:` line and exit status 1 as errors found after parsing, without clap's usage block.
+fn clap_exit(e: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let _ = e.print();
+            ExitCode::SUCCESS
+        }
+        // Its rendering is the whole help text, which has no error line to keep.
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            eprintln!("error: a subcommand is required (see --help)");
+            ExitCode::FAILURE
+        }
+        _ => {
+            eprintln!("error: {}", clap_message(&e.render().to_string()));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The first paragraph of clap's rendered error, on one line. Usually that is its first line,
+/// but "the following required arguments were not provided:" lists them on the next ones.
+fn clap_message(rendered: &str) -> String {
+    let first = rendered.trim_start();
+    let first = first.strip_prefix("error:").unwrap_or(first);
+    first
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.is_empty() && !l.starts_with("Usage:"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The context chain joined with ": " on one line, never a backtrace. A part whose text is
+/// already there is skipped: errors that print their source (`{file}: {field}: {source}`)
+/// would otherwise repeat it once for themselves and once as the next link of the chain.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for part in e.chain() {
+        let part = part.to_string().replace('\n', " ");
+        let part = part.trim();
+        // Contained as whole ": "-separated parts, so "0" is not lost inside "--width: 10".
+        if part.is_empty() || format!(": {msg}:").contains(&format!(": {part}:")) {
+            continue;
+        }
+        if msg.is_empty() || part.starts_with(msg.as_str()) {
+            // A cause that begins with everything said so far says it all.
+            msg = part.to_string();
+        } else {
+            msg = format!("{msg}: {part}");
+        }
+    }
+    msg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_context_is_printed_once() {
+        let inner = anyhow::anyhow!("x.png: cannot read: No such file");
+        let e = inner.context("s.toml: objects[0].mesh: x.png: cannot read: No such file");
+        assert_eq!(
+            one_line(&e),
+            "s.toml: objects[0].mesh: x.png: cannot read: No such file"
+        );
+        let e = anyhow::anyhow!("x.png: cannot read: No such file").context("x.png: cannot read");
+        assert_eq!(one_line(&e), "x.png: cannot read: No such file");
+        let e = anyhow::anyhow!("No such file (os error 2)").context("x.png: cannot write here");
+        assert_eq!(
+            one_line(&e),
+            "x.png: cannot write here: No such file (os error 2)"
+        );
+        let e = anyhow::anyhow!("0").context("--width: 10");
+        assert_eq!(one_line(&e), "--width: 10: 0");
+    }
+
+    #[test]
+    fn clap_errors_keep_their_first_paragraph() {
+        let m = clap_message(
+            "error: the following required arguments were not provided:\n  --out <DIR>\n\n\
+             Usage: subsurface export-mitsuba --out <DIR>\n\nFor more information, try '--help'.\n",
+        );
+        assert_eq!(
+            m,
+            "the following required arguments were not provided: --out <DIR>"
+        );
+        let m = clap_message(
+            "error: unexpected argument '--x' found\n\n  tip: to pass '--x' as a value, use \
+             '-- --x'\n\nUsage: subsurface kernel [OPTIONS]\n",
+        );
+        assert_eq!(m, "unexpected argument '--x' found");
     }
 }

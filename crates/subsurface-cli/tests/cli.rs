@@ -107,7 +107,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         ),
         (&["render", "--samples", "4", "--out", "o.png"], "samples"),
         (
-            &["render", "--exposure", "nan", "--out", "o.png"],
+            &["render", "--exposure-ev", "nan", "--out", "o.png"],
             "exposure",
         ),
         (&["render", "--out", "no/such/dir/o.png"], "o.png"),

@@ -170,7 +170,7 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
         "beer",
         "--thickness-filter",
         "5",
-        "--exposure",
+        "--exposure-ev",
         "0.5",
         "--no-follow-surface",
         "--gaussians",
@@ -189,7 +189,7 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
         return;
     }
     let saved = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
-    assert!(saved.contains("sss = \"gaussian6\""), "{saved}");
+    assert!(saved.contains("method = \"gaussian6\""), "{saved}");
     // The saved scene is a plain scene file: `render` reproduces the view without flags.
     assert!(saved.contains("follow_surface = false"), "{saved}");
     assert!(

@@ -213,9 +213,169 @@ pub fn separable_kernel_for(
         .collect())
 }
 
+/// Number of Gaussians the six-Gaussian screen-space method chains (d'Eon's skin has six).
+pub const SCREEN_GAUSSIANS: usize = 6;
+
+/// Everything the screen-space passes need of one diffusion profile: one row of the profile
+/// table that the GPU indexes by each pixel's profile id.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScreenKernels {
+    /// Separable SSS: `[r, g, b, offset_mm]`, centre first ([`separable_kernel_for`]).
+    pub separable: Vec<[f32; 4]>,
+    /// Hable's 13 taps `[x_mm, y_mm, r, g, b]`, centre first, each channel summing to 1.
+    pub hable13: [[f32; 5]; 13],
+    /// The six Gaussians `[r, g, b, variance_mm2]`, by increasing variance, each channel's
+    /// weights summing to 1 (the albedo carries the colour).
+    pub gaussians: [[f32; 4]; SCREEN_GAUSSIANS],
+}
+
+impl ScreenKernels {
+    /// Skin as the papers give it: Jimenez's separable kernel ([`separable_kernel`]), Hable's
+    /// table ([`hable13_kernel`]) and d'Eon's six Gaussians.
+    pub fn skin(params: &KernelParams) -> Result<Self> {
+        Ok(Self {
+            separable: separable_kernel(params)?,
+            hable13: hable13_kernel(),
+            gaussians: gaussian_table(&SumOfGaussians::skin())?,
+        })
+    }
+
+    /// Any profile given as Gaussians (a measured material's fit): the separable kernel of
+    /// the profile itself over [`separable_range_for`], Hable's taps re-weighted to it, and
+    /// its Gaussians.
+    pub fn for_profile(profile: &SumOfGaussians, params: &KernelParams) -> Result<Self> {
+        Ok(Self {
+            separable: separable_kernel_for(
+                profile,
+                params,
+                separable_range_for(profile, params.samples),
+            )?,
+            hable13: hable13_for(profile)?,
+            gaussians: gaussian_table(profile)?,
+        })
+    }
+}
+
+/// The profile's Gaussians as `[r, g, b, variance]` rows, weights normalised per channel; a
+/// profile of fewer terms is padded with weightless copies of its widest one (a blur step of
+/// zero width, which changes nothing).
+pub fn gaussian_table(profile: &SumOfGaussians) -> Result<[[f32; 4]; SCREEN_GAUSSIANS]> {
+    let p = profile.normalized()?;
+    let terms = p.terms();
+    if terms.len() > SCREEN_GAUSSIANS {
+        return Err(ProfileError::Invalid {
+            field: "gaussians".into(),
+            reason: format!(
+                "the screen-space six-Gaussian method takes at most {SCREEN_GAUSSIANS} (got {})",
+                terms.len()
+            ),
+        });
+    }
+    let widest = terms[terms.len() - 1].variance as f32;
+    let mut out = [[0.0, 0.0, 0.0, widest]; SCREEN_GAUSSIANS];
+    for (row, t) in out.iter_mut().zip(terms) {
+        *row = [
+            t.weight[0] as f32,
+            t.weight[1] as f32,
+            t.weight[2] as f32,
+            t.variance as f32,
+        ];
+    }
+    Ok(out)
+}
+
+/// Hable's 13 jittered taps for another profile. The table samples d'Eon's skin profile: each
+/// weight is the skin profile at the tap times the area the tap stands for. For a profile of
+/// another size the positions scale by the ratio of standard deviations `s`, and each weight
+/// by `R(s r) / R_skin(r)` per channel (the same samples, importance-weighted for the new
+/// profile), then each channel is normalised. For skin itself this is [`hable13_kernel`].
+pub fn hable13_for(profile: &SumOfGaussians) -> Result<[[f32; 5]; 13]> {
+    let skin = SumOfGaussians::skin();
+    let scale = (profile.mean_variance() / skin.mean_variance()).sqrt();
+    positive("profile size", scale)?;
+    let mut out = hable13_kernel();
+    let mut sum = [0.0f64; 3];
+    for t in &mut out {
+        let r = ((t[0] as f64).powi(2) + (t[1] as f64).powi(2)).sqrt();
+        let ours = profile.eval(r * scale);
+        let theirs = skin.eval(r);
+        for c in 0..3 {
+            let w = t[2 + c] as f64 * ours[c] / theirs[c].max(1e-300);
+            t[2 + c] = w as f32;
+            sum[c] += w;
+        }
+        t[0] = (t[0] as f64 * scale) as f32;
+        t[1] = (t[1] as f64 * scale) as f32;
+    }
+    for (c, &s) in sum.iter().enumerate() {
+        positive(&format!("hable13 weight sum.{}", CHANNELS[c]), s)?;
+    }
+    for t in &mut out {
+        for c in 0..3 {
+            t[2 + c] = (t[2 + c] as f64 / sum[c]) as f32;
+        }
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{SKIN_VARIANCES_MM2, SKIN_WEIGHTS};
+
+    #[test]
+    fn screen_kernels_of_skin_are_the_papers_tables() {
+        let params = KernelParams::default();
+        let k = ScreenKernels::skin(&params).unwrap();
+        assert_eq!(k.separable, separable_kernel(&params).unwrap());
+        assert_eq!(k.hable13, hable13_kernel());
+        for (row, (v, w)) in k
+            .gaussians
+            .iter()
+            .zip(SKIN_VARIANCES_MM2.iter().zip(SKIN_WEIGHTS))
+        {
+            assert_eq!(row[3], *v as f32);
+            for c in 0..3 {
+                assert!((row[c] as f64 - w[c]).abs() < 1e-6);
+            }
+        }
+        // Re-weighting Hable's table for skin itself changes nothing.
+        let again = hable13_for(&SumOfGaussians::skin()).unwrap();
+        for (a, b) in again.iter().zip(hable13_kernel().iter()) {
+            for i in 0..5 {
+                assert!((a[i] - b[i]).abs() < 1e-6, "{a:?} vs {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_wider_profile_spreads_hable_taps_further_and_keeps_unit_sums() {
+        let wide = SumOfGaussians::new(
+            SumOfGaussians::skin()
+                .terms()
+                .iter()
+                .map(|t| crate::GaussianTerm {
+                    variance: t.variance * 4.0,
+                    weight: t.weight,
+                })
+                .collect(),
+        )
+        .unwrap();
+        let k = hable13_for(&wide).unwrap();
+        let skin = hable13_kernel();
+        // Scaling the profile by 2 scales the taps by 2 and leaves the weights.
+        for (a, b) in k.iter().zip(skin.iter()) {
+            assert!((a[0] - 2.0 * b[0]).abs() < 1e-4 && (a[1] - 2.0 * b[1]).abs() < 1e-4);
+            for c in 2..5 {
+                assert!((a[c] - b[c]).abs() < 1e-4, "{a:?} vs {b:?}");
+            }
+        }
+        let table = gaussian_table(&wide).unwrap();
+        for c in 0..3 {
+            let s: f32 = table.iter().map(|r| r[c]).sum();
+            assert!((s - 1.0).abs() < 1e-5);
+        }
+    }
 
     fn unit_strength(samples: u32) -> KernelParams {
         KernelParams {

@@ -13,8 +13,9 @@
 use std::error::Error;
 use std::path::PathBuf;
 
-use subsurface_render::passes::sss::{self, SssConfig, SssInputs, SssMethod, SssPass};
-use subsurface_render::{GpuContext, RenderError, readback};
+use subsurface_profile::{KernelParams, ScreenKernels};
+use subsurface_render::passes::sss::{self, SssInputs, SssPass};
+use subsurface_render::{GpuContext, RenderError, SssMethod, SssSettings, readback};
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 480;
@@ -34,7 +35,7 @@ const OCCLUDER_RADIUS: f32 = 0.02;
 struct Targets {
     @location(0) diffuse: vec4<f32>, // linear HDR radiance
     @location(1) depth: f32,         // linear view depth in scene units
-    @location(2) sss: vec2<f32>,     // r = SSS strength, g = scene units per millimetre
+    @location(2) sss: vec4<f32>,     // SSS strength, scene units per millimetre, profile row
 };
 
 @vertex
@@ -72,7 +73,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> Targets {
         let check = (u32(frag.x / 32.0) + u32(frag.y / 32.0)) % 2u;
         out.diffuse = vec4<f32>(vec3<f32>(0.12, 0.16, 0.22) * (1.0 + f32(check)), 1.0);
         out.depth = 1000.0;
-        out.sss = vec2<f32>(0.0, 0.0);
+        out.sss = vec4<f32>(0.0);
         return out;
     }
     let p = t * dir;
@@ -93,7 +94,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> Targets {
     out.diffuse = vec4<f32>(albedo * light, 1.0);
     out.depth = -p.z;
     // The ball is modelled in metres, so one profile millimetre is 0.001 scene units.
-    out.sss = vec2<f32>(1.0, 0.001);
+    // Profile row 0 of the table given to the pass (skin).
+    out.sss = vec4<f32>(1.0, 0.001, 0.0, 0.0);
     return out;
 }
 "#;
@@ -140,7 +142,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     };
     let diffuse = target("diffuse", sss::FORMAT); // Rgba16Float
     let depth = target("linear depth", wgpu::TextureFormat::R32Float);
-    let sss_params = target("sss strength/scale", wgpu::TextureFormat::Rg32Float);
+    let sss_params = target(
+        "sss strength/scale/profile",
+        wgpu::TextureFormat::Rgba16Float,
+    );
     let view = |t: &wgpu::Texture| t.create_view(&Default::default());
     let (diffuse_view, depth_view, sss_view) = (view(&diffuse), view(&depth), view(&sss_params));
 
@@ -269,8 +274,9 @@ fn main() -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
-/// Applies SSS in place on `diffuse`. In an application, build the pass once, `bind` it again
-/// after a resize, call `set_camera` when the projection changes, and `encode` every frame.
+/// Applies SSS in place on `diffuse`. In an application, build the pass once with a profile
+/// table (one row per material; each pixel's SSS texture names its row), `resize` it after a
+/// resize, `prepare` it when the projection changes, and `encode` every frame.
 fn scatter(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -280,12 +286,16 @@ fn scatter(
     sss: &wgpu::TextureView,
     focal_px: f32,
 ) -> Result<(), RenderError> {
-    let config = SssConfig {
+    let settings = SssSettings {
         method,
         ..Default::default()
     };
-    let mut pass = SssPass::new(device, &config)?;
-    pass.bind(
+    let skin = ScreenKernels::skin(&KernelParams {
+        samples: settings.samples,
+        ..Default::default()
+    })?;
+    let mut pass = SssPass::new(device, &settings, &[skin])?;
+    pass.resize(
         device,
         &SssInputs {
             diffuse,
@@ -293,7 +303,7 @@ fn scatter(
             sss,
         },
     );
-    pass.set_camera(queue, focal_px); // 0.5 * height / tan(fov_y / 2)
+    pass.prepare(queue, focal_px); // 0.5 * height / tan(fov_y / 2)
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&mut encoder, None); // `diffuse` now holds the scattered radiance
     queue.submit([encoder.finish()]);

@@ -17,9 +17,18 @@ pub enum RenderError {
     #[error("GPU readback failed: {0}")]
     Readback(String),
     #[error(transparent)]
-    Scene(#[from] crate::scene::SceneError),
+    Scene(#[from] crate::scene::error::SceneError),
     #[error(transparent)]
     Profile(#[from] subsurface_profile::ProfileError),
+}
+
+impl From<crate::settings::InvalidSetting> for RenderError {
+    fn from(e: crate::settings::InvalidSetting) -> Self {
+        RenderError::Invalid {
+            field: e.field,
+            message: e.message,
+        }
+    }
 }
 
 impl RenderError {

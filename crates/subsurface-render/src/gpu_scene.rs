@@ -8,12 +8,12 @@ use crate::error::RenderError;
 use crate::gpu::GpuContext;
 use std::collections::HashMap;
 
+use crate::gpu::layout;
+use crate::material::{MaterialCache, MaterialOptics};
 use crate::mesh::Vertex;
-use crate::passes::transmittance::{
-    MaterialCache, MaterialOptics, TransmittanceConfig, lut_texture,
-};
-use crate::passes::util;
+use crate::passes::transmittance::lut_texture;
 use crate::scene::{LightDesc, LightKind, Object, Scene};
+use crate::settings::RenderSettings;
 use crate::uniforms::{
     CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat, v4,
 };
@@ -28,14 +28,14 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
 pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let fragment = wgpu::ShaderStages::FRAGMENT;
     let tex = |binding| {
-        util::float_texture_entry(binding, fragment, true, wgpu::TextureViewDimension::D2)
+        layout::float_texture_entry(binding, fragment, true, wgpu::TextureViewDimension::D2)
     };
     let sampler =
-        |binding| util::sampler_entry(binding, fragment, wgpu::SamplerBindingType::Filtering);
+        |binding| layout::sampler_entry(binding, fragment, wgpu::SamplerBindingType::Filtering);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("object"),
         entries: &[
-            util::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            layout::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
             tex(1),
             tex(2),
             tex(3),
@@ -63,18 +63,22 @@ impl GpuObject {
     }
 }
 
-/// Scene units per profile millimetre: the profile's radii are in mm, the object's units are
-/// `mm_per_unit` mm, and its transform scales them into the world.
+/// Scene units per profile millimetre of a loaded object.
 pub fn world_per_mm(object: &Object) -> f32 {
-    let s = object.transform.determinant().abs().cbrt();
-    object.material.sss_width * s / object.mm_per_unit
+    crate::scene::units::world_per_mm(
+        object.transform,
+        object.mm_per_unit,
+        object.material.sss_width,
+    )
 }
 
-/// `optics` gives the material's Beer-Lambert extinction; `lut_range_mm` the T(s) LUT width.
+/// `optics` gives the material's Beer-Lambert extinction; `lut_range_mm` the T(s) LUT width;
+/// `profile_row` the object's row in the screen-space profile table.
 pub fn object_uniform(
     object: &Object,
     optics: &MaterialOptics,
     lut_range_mm: f32,
+    profile_row: u32,
 ) -> ObjectUniform {
     let m = &object.material;
     ObjectUniform {
@@ -96,7 +100,7 @@ pub fn object_uniform(
             object.albedo_texture.is_some() as u32 as f32,
             object.normal_texture.is_some() as u32 as f32,
             object.specular_texture.is_some() as u32 as f32,
-            0.0,
+            profile_row as f32,
         ],
         transmit: [
             optics.sigma_t[0],
@@ -173,10 +177,12 @@ fn upload_texture(
     Ok(texture.create_view(&Default::default()))
 }
 
+/// `profile_rows`: each scene object's row in the screen-space profile table.
 pub fn upload_objects(
     ctx: &GpuContext,
     scene: &Scene,
     layout: &wgpu::BindGroupLayout,
+    profile_rows: &[u32],
 ) -> Result<Vec<GpuObject>, RenderError> {
     let device = &ctx.device;
     let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -223,7 +229,12 @@ pub fn upload_objects(
         let (lut, lut_range) = &luts[&object.material.profile];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&label),
-            contents: bytemuck::bytes_of(&object_uniform(object, &optics, *lut_range)),
+            contents: bytemuck::bytes_of(&object_uniform(
+                object,
+                &optics,
+                *lut_range,
+                profile_rows.get(i).copied().unwrap_or(0),
+            )),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let albedo = upload_texture(
@@ -327,12 +338,11 @@ fn safe_up(dir: Vec3) -> Vec3 {
     if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y }
 }
 
-/// Light-space matrices and uniforms. Shadow near/far planes are fitted to the scene's
-/// bounding sphere so that depth precision is spent where the geometry is.
-pub fn light_setup(
-    scene: &Scene,
-    transmittance: &TransmittanceConfig,
-) -> Result<LightSetup, RenderError> {
+/// Light-space matrices and uniforms, with the ambient light and transmittance of `settings`.
+/// Shadow near/far planes are fitted to the scene's bounding sphere so that depth precision is
+/// spent where the geometry is.
+pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetup, RenderError> {
+    let transmittance = &settings.transmittance;
     if scene.desc.lights.len() > MAX_LIGHTS {
         return Err(RenderError::invalid(
             "lights",
@@ -355,7 +365,7 @@ pub fn light_setup(
         .max(1);
     let mut uniform = LightsUniform::zeroed_default();
     uniform.count = [scene.desc.lights.len() as u32, 0, 0, 0];
-    let a = scene.desc.render.ambient;
+    let a = settings.ambient;
     uniform.ambient = [a[0], a[1], a[2], 0.0];
     uniform.transmittance = [
         transmittance.method.code(),

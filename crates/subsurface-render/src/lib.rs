@@ -7,11 +7,13 @@
 pub mod error;
 pub mod gpu;
 pub mod gpu_scene;
+pub mod material;
 pub mod mesh;
 pub mod passes;
 pub mod readback;
 pub mod renderer;
 pub mod scene;
+pub mod settings;
 pub mod timing;
 pub mod uniforms;
 
@@ -20,6 +22,9 @@ pub use gpu::GpuContext;
 pub use passes::tonemap::DebugView;
 pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
+pub use settings::{
+    RenderSettings, SssMethod, SssSettings, TransmittanceMethod, TransmittanceSettings,
+};
 pub use timing::PassTiming;
 
 /// True when `SUBSURFACE_REQUIRE_GPU=1`: tests must fail, not skip, without an adapter.

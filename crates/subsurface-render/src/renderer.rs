@@ -6,62 +6,43 @@ use wgpu_profiler::GpuProfiler;
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
+use crate::material::{MaterialCache, ProfileTable};
 use crate::passes::copy::CopyPass;
 use crate::passes::lighting::{LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
-use crate::passes::sss::{SssConfig, SssInputs, SssMethod, SssPass};
+use crate::passes::sss::{SssInputs, SssPass};
 use crate::passes::texture_space::{self, TextureSpacePass, TextureSpaceSettings, TsmPass};
 use crate::passes::tonemap::{self, DebugView, ToneMapInputs, ToneMapPass};
-use crate::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
 use crate::readback;
 use crate::scene::Scene;
+use crate::settings::{RenderSettings, SssMethod, TransmittanceMethod};
 use crate::timing::{self, PassTiming};
 
-/// Per-render settings that are not part of the scene file.
-#[derive(Clone, Debug)]
+/// What a renderer draws with: the scene's `[render]` settings (or a copy the command line or
+/// the viewer changed) and what is not part of a scene file.
+#[derive(Clone, Debug, Default)]
 pub struct RenderOptions {
-    pub width: u32,
-    pub height: u32,
-    pub exposure_ev: f32,
+    pub settings: RenderSettings,
     pub view: DebugView,
-    /// Screen-space subsurface scattering settings.
-    pub sss: SssConfig,
-    /// Light through thin parts.
-    pub transmittance: TransmittanceConfig,
     /// Benchmarks: also time a plain full-screen copy of the diffuse target ("copy").
     pub baseline_copy: bool,
 }
 
-impl Default for RenderOptions {
-    fn default() -> Self {
+impl RenderOptions {
+    /// The scene's own settings.
+    pub fn from_scene(scene: &Scene) -> Self {
         Self {
-            width: 1280,
-            height: 720,
-            exposure_ev: 0.0,
-            view: DebugView::Final,
-            sss: SssConfig::default(),
-            transmittance: TransmittanceConfig::default(),
-            baseline_copy: false,
+            settings: scene.desc.render.clone(),
+            ..Default::default()
         }
     }
-}
 
-impl RenderOptions {
-    /// The scene's own size and exposure.
-    pub fn from_scene(scene: &Scene) -> Self {
-        let r = &scene.desc.render;
-        Self {
-            width: r.width,
-            height: r.height,
-            exposure_ev: r.exposure_ev,
-            view: DebugView::Final,
-            sss: SssConfig::default(),
-            transmittance: TransmittanceConfig {
-                normal_shrink: r.normal_shrink,
-                ..Default::default()
-            },
-            baseline_copy: false,
-        }
+    pub fn width(&self) -> u32 {
+        self.settings.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.settings.height
     }
 }
 
@@ -98,6 +79,8 @@ pub struct Renderer {
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
     material_names: Vec<String>,
+    /// The screen-space profile table and each object's row in it.
+    profiles: ProfileTable,
     /// Group 2 of the lighting pass (texture-space maps per object).
     maps_layout: wgpu::BindGroupLayout,
     texture_space: TextureSpacePass,
@@ -109,12 +92,13 @@ pub struct Renderer {
 }
 
 fn texture_settings(options: &RenderOptions) -> TextureSpaceSettings {
+    let s = &options.settings;
     TextureSpaceSettings {
-        diffuse: options.sss.method == SssMethod::Texture,
-        tsm: options.transmittance.method == TransmittanceMethod::Tsm,
-        size: options.sss.texture_size,
-        padding: options.sss.texture_padding,
-        albedo_pre: options.sss.texture_albedo_pre,
+        diffuse: s.sss.method == SssMethod::Texture,
+        tsm: s.transmittance.method == TransmittanceMethod::Tsm,
+        size: s.sss.texture_size,
+        padding: s.sss.texture_padding,
+        albedo_pre: s.sss.texture_albedo_pre,
     }
 }
 
@@ -128,18 +112,16 @@ fn skin_flags(scene: &Scene) -> Vec<bool> {
 }
 
 fn check_options(ctx: &GpuContext, options: &RenderOptions) -> Result<(), RenderError> {
-    ctx.check_size("", options.width, options.height)?;
-    if !options.exposure_ev.is_finite() || options.exposure_ev.abs() > 32.0 {
-        return Err(RenderError::invalid(
-            "exposure",
-            format!(
-                "must be finite and within +-32 EV (got {})",
-                options.exposure_ev
-            ),
-        ));
-    }
-    options.transmittance.validate()?;
-    options.sss.validate()
+    options.settings.validate()?;
+    ctx.check_size("", options.width(), options.height())
+}
+
+fn profile_table(scene: &Scene, options: &RenderOptions) -> Result<ProfileTable, RenderError> {
+    ProfileTable::for_scene(
+        scene,
+        options.settings.sss.samples,
+        &mut MaterialCache::default(),
+    )
 }
 
 fn light_kinds(lights: &gpu_scene::LightSetup, count: usize) -> Vec<[f32; 4]> {
@@ -227,8 +209,9 @@ impl Renderer {
         check_options(ctx, &options)?;
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
-        let objects = gpu_scene::upload_objects(ctx, scene, &object_layout)?;
-        let mut lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        let profiles = profile_table(scene, &options)?;
+        let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
+        let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.transmittance[3] = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
@@ -238,7 +221,7 @@ impl Renderer {
             lights.atlas_size,
             &kinds,
         )?;
-        let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
+        let camera = gpu_scene::camera_uniform(scene, options.width(), options.height());
         let maps_layout = texture_space::maps_layout(device);
         let settings = texture_settings(&options);
         let tsm = settings
@@ -255,10 +238,10 @@ impl Renderer {
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
-        let targets = LightingTargets::new(ctx, options.width, options.height);
+        let targets = LightingTargets::new(ctx, options.width(), options.height());
         let views = target_views(&targets);
-        let mut sss = SssPass::new(device, &options.sss)?;
-        sss.bind(
+        let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
+        sss.resize(
             device,
             &SssInputs {
                 diffuse: &targets.diffuse,
@@ -266,8 +249,8 @@ impl Renderer {
                 sss: &views[3],
             },
         );
-        sss.set_camera(&ctx.queue, camera.params[2]);
-        let output = output_texture(ctx, options.width, options.height);
+        sss.prepare(&ctx.queue, camera.params[2]);
+        let output = output_texture(ctx, options.width(), options.height());
         let profiler = timing::new_profiler(device)?;
         let copy = options
             .baseline_copy
@@ -285,7 +268,7 @@ impl Renderer {
             tonemaps: Vec::new(),
             output,
             profiler,
-            background: scene.desc.render.background,
+            background: options.settings.background,
             far: scene.desc.camera.far,
             light_kinds: kinds,
             shadow_signature: shadow_signature(&lights),
@@ -294,6 +277,7 @@ impl Renderer {
                 .iter()
                 .map(|o| o.material.profile.clone())
                 .collect(),
+            profiles,
             maps_layout,
             texture_space,
             texture_signature: (settings, skin_flags(scene)),
@@ -318,13 +302,20 @@ impl Renderer {
             .iter()
             .map(|o| o.material.profile.clone())
             .collect();
+        let profiles = profile_table(scene, options)?;
+        let new_profiles = profiles.kernels != self.profiles.kernels;
         let reuploaded = names != self.material_names;
         if reuploaded {
             // A different profile needs a different T(s) LUT in the object's bind group.
-            self.objects = gpu_scene::upload_objects(&self.ctx, scene, &self.object_layout)?;
+            self.objects = gpu_scene::upload_objects(
+                &self.ctx,
+                scene,
+                &self.object_layout,
+                &profiles.object_rows,
+            )?;
             self.material_names = names;
         } else {
-            let mut cache = crate::passes::transmittance::MaterialCache::default();
+            let mut cache = MaterialCache::default();
             let mut gpu = self.objects.iter();
             for (i, o) in scene.objects.iter().enumerate() {
                 if o.mesh.indices.is_empty() {
@@ -335,11 +326,12 @@ impl Renderer {
                     &o.material.profile,
                     &format!("objects[{i}].material.profile"),
                 )?;
-                let u = gpu_scene::object_uniform(o, &optics, 6.0);
+                let row = profiles.object_rows[i];
+                let u = gpu_scene::object_uniform(o, &optics, 6.0, row);
                 queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
             }
         }
-        let mut lights = gpu_scene::light_setup(scene, &options.transmittance)?;
+        let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.transmittance[3] = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
@@ -372,7 +364,7 @@ impl Renderer {
             (_, false) => self.tsm = None,
         }
         self.light_kinds = kinds;
-        let camera = gpu_scene::camera_uniform(scene, options.width, options.height);
+        let camera = gpu_scene::camera_uniform(scene, options.width(), options.height());
         // The lighting pass binds the shadow atlas and translucent shadow maps: rebuilt only
         // when those are new, else a camera or light move is two buffer writes (the viewer
         // calls this on every mouse drag).
@@ -401,15 +393,21 @@ impl Renderer {
                 TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
             self.texture_signature = texture_signature;
         }
-        let resized = (options.width, options.height) != (self.options.width, self.options.height);
+        let resized =
+            (options.width(), options.height()) != (self.options.width(), self.options.height());
         if resized {
-            self.targets = LightingTargets::new(&self.ctx, options.width, options.height);
-            self.output = output_texture(&self.ctx, options.width, options.height);
+            self.targets = LightingTargets::new(&self.ctx, options.width(), options.height());
+            self.output = output_texture(&self.ctx, options.width(), options.height());
         }
         let views = target_views(&self.targets);
-        if resized || options.sss != self.options.sss {
-            self.sss.set_config(&device, &options.sss)?;
-            self.sss.bind(
+        let new_sss = new_profiles || options.settings.sss != self.options.settings.sss;
+        if new_sss {
+            self.sss
+                .set_settings(&device, &options.settings.sss, &profiles.kernels)?;
+        }
+        self.profiles = profiles;
+        if resized || new_sss {
+            self.sss.resize(
                 &device,
                 &SssInputs {
                     diffuse: &self.targets.diffuse,
@@ -418,13 +416,13 @@ impl Renderer {
                 },
             );
         }
-        self.sss.set_camera(&queue, camera.params[2]);
+        self.sss.prepare(&queue, camera.params[2]);
         if resized || options.baseline_copy != self.copy.is_some() {
             self.copy = options
                 .baseline_copy
                 .then(|| CopyPass::new(&device, &self.targets.diffuse));
         }
-        self.background = scene.desc.render.background;
+        self.background = options.settings.background;
         self.far = scene.desc.camera.far;
         self.options = options.clone();
         for i in 0..self.tonemaps.len() {
@@ -478,7 +476,7 @@ impl Renderer {
             self.far,
             p,
         );
-        if self.options.view.blurs() && self.options.sss.method != SssMethod::None {
+        if self.options.view.blurs() && self.options.settings.sss.method.is_screen_space() {
             self.sss.encode(encoder, p);
         }
         if let Some(copy) = &self.copy {
@@ -491,7 +489,7 @@ impl Renderer {
     /// image before the screen-space blur).
     fn irradiance_map(&self) -> Option<&wgpu::Texture> {
         if self.options.view != DebugView::Irradiance
-            || self.options.sss.method != SssMethod::Texture
+            || self.options.settings.sss.method != SssMethod::Texture
         {
             return None;
         }
@@ -540,7 +538,7 @@ impl Renderer {
         let o = &self.options;
         target.pass.set_params_with(
             &self.ctx.queue,
-            o.exposure_ev,
+            o.settings.exposure_ev,
             o.view,
             self.far,
             target.irradiance.is_some(),
@@ -645,10 +643,15 @@ impl Renderer {
         ))
     }
 
-    /// (SSS strength, scene units per mm) of the last frame.
-    pub fn read_sss(&self) -> Result<Vec<[f32; 2]>, RenderError> {
-        let v = readback::read_float(&self.ctx, &self.targets.sss)?.0;
-        Ok(v.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+    /// (SSS strength, scene units per mm, profile row, unused) of the last frame.
+    pub fn read_sss(&self) -> Result<Vec<[f32; 4]>, RenderError> {
+        Ok(rgba(readback::read_float(&self.ctx, &self.targets.sss)?.0))
+    }
+
+    /// The screen-space profile table (row `i` is the kernel of pixels whose SSS target
+    /// names profile `i`) and each scene object's row.
+    pub fn profile_table(&self) -> &ProfileTable {
+        &self.profiles
     }
 }
 

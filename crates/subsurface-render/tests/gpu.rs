@@ -4,16 +4,13 @@
 mod common;
 
 use common::{context, masked_mean, scene};
-use subsurface_render::{DebugView, RenderOptions, Renderer};
+use subsurface_render::{RenderOptions, Renderer, Scene, SssMethod};
 
-fn options(w: u32, h: u32) -> RenderOptions {
-    RenderOptions {
-        width: w,
-        height: h,
-        exposure_ev: 0.0,
-        view: DebugView::Final,
-        ..Default::default()
-    }
+/// The scene's own settings at this size.
+fn options(scene: &Scene, w: u32, h: u32) -> RenderOptions {
+    let mut o = RenderOptions::from_scene(scene);
+    (o.settings.width, o.settings.height) = (w, h);
+    o
 }
 
 fn luminance(c: [f32; 4]) -> f32 {
@@ -41,7 +38,7 @@ fn lit_sphere_is_brighter_on_the_lit_side() {
         "#,
     );
     let (w, h) = (96, 96);
-    let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+    let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
     r.render().unwrap();
     let diffuse: Vec<f32> = r
         .read_diffuse()
@@ -96,7 +93,7 @@ fn shadow_caster_darkens_the_receiver() {
                 if kind == "directional" { 1.0 } else { 9.0 }
             ));
             let (w, h) = (64, 64);
-            let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+            let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
             r.render().unwrap();
             let d = r.read_diffuse().unwrap();
             // The light projects the caster's centre onto the receiver at about (0, 0): the
@@ -131,7 +128,7 @@ fn linear_depth_matches_camera_distance() {
         "#,
     );
     let (w, h) = (64, 48);
-    let mut r = Renderer::new(&ctx, &s, options(w, h)).unwrap();
+    let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
     r.render().unwrap();
     let depth = r.read_linear_depth().unwrap();
     // Front face at z = 0.05, camera at z = 2 looking down -z: linear (view) depth 1.95
@@ -182,7 +179,7 @@ fn sizes_outside_the_device_limit_are_errors() {
     let s = subsurface_render::Scene::default_scene();
     let max = ctx.max_texture_size();
     for (w, h) in [(0, 64), (64, 0), (max + 1, 64)] {
-        let err = Renderer::new(&ctx, &s, options(w, h))
+        let err = Renderer::new(&ctx, &s, options(&s, w, h))
             .err()
             .expect("accepted a bad size");
         let msg = err.to_string();
@@ -198,7 +195,7 @@ fn timestamps_report_each_pass() {
         return;
     }
     let s = subsurface_render::Scene::default_scene();
-    let mut r = Renderer::new(&ctx, &s, options(64, 64)).unwrap();
+    let mut r = Renderer::new(&ctx, &s, options(&s, 64, 64)).unwrap();
     let frame = r.render().unwrap();
     for name in ["shadow", "lighting", "tonemap"] {
         let t = frame
@@ -220,11 +217,11 @@ fn update_matches_a_fresh_renderer() {
     edited.desc.camera.position = [0.1, 0.05, 0.45];
     edited.desc.lights[0].intensity *= 0.5;
     edited.desc.lights[1].position[0] -= 0.1;
-    let mut opts = options(96, 64);
+    let mut opts = options(&scene, 96, 64);
     let mut r = Renderer::new(&ctx, &scene, opts.clone()).unwrap();
     r.render().unwrap();
-    opts.sss.method = subsurface_render::passes::sss::SssMethod::Gaussian6;
-    opts.exposure_ev = 0.5;
+    opts.settings.sss.method = SssMethod::Gaussian6;
+    opts.settings.exposure_ev = 0.5;
     r.update(&edited, &opts).unwrap();
     let updated = r.render().unwrap().image;
     let fresh = Renderer::new(&ctx, &edited, opts)

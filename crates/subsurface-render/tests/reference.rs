@@ -5,8 +5,8 @@
 mod common;
 
 use common::{assets_dir, context, flip_against_reference, repo_root};
-use subsurface_render::passes::sss::{SssConfig, SssMethod};
-use subsurface_render::passes::transmittance::TransmittanceMethod;
+use subsurface_render::SssMethod;
+use subsurface_render::TransmittanceMethod;
 use subsurface_render::{RenderOptions, Renderer, Scene};
 
 /// FLIP mean and 95th-percentile limits: lavapipe against its own references differs only by
@@ -25,12 +25,9 @@ fn check(name: &str, scene: &Scene) {
     let Some(ctx) = context() else { return };
     for method in METHODS {
         let mut opts = RenderOptions::from_scene(scene);
-        opts.width = 256;
-        opts.height = 256;
-        opts.sss = SssConfig {
-            method,
-            ..SssConfig::for_scene(scene)
-        };
+        opts.settings.width = 256;
+        opts.settings.height = 256;
+        opts.settings.sss.method = method;
         let mut r = Renderer::new(&ctx, scene, opts).unwrap();
         let img = r.render().unwrap().image;
         flip_against_reference(
@@ -42,9 +39,9 @@ fn check(name: &str, scene: &Scene) {
     }
     // Transmittance off, for the record of what it adds.
     let mut opts = RenderOptions::from_scene(scene);
-    opts.width = 256;
-    opts.height = 256;
-    opts.transmittance.method = TransmittanceMethod::Off;
+    opts.settings.width = 256;
+    opts.settings.height = 256;
+    opts.settings.transmittance.method = TransmittanceMethod::Off;
     let img = Renderer::new(&ctx, scene, opts)
         .unwrap()
         .render()

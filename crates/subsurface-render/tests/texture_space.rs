@@ -6,11 +6,11 @@ mod common;
 
 use common::{assets_dir, context, flip_against_reference, repo_root};
 use subsurface_profile::{SumOfGaussians, gaussian};
-use subsurface_render::passes::sss::{SssConfig, SssMethod};
+use subsurface_render::SssMethod;
+use subsurface_render::TransmittanceMethod;
 use subsurface_render::passes::texture_space::{
     BlurKernel, MAP_FORMAT, STRETCH_FORMAT, TextureBlur, cpu_blur, cpu_dilate,
 };
-use subsurface_render::passes::transmittance::TransmittanceMethod;
 use subsurface_render::{GpuContext, RenderOptions, Renderer, Scene, readback};
 
 /// GPU blur vs its CPU mirror: largest absolute difference over the map, relative to the
@@ -257,13 +257,10 @@ fn head_scene() -> Option<Scene> {
 
 fn texture_options(scene: &Scene, padding: u32) -> RenderOptions {
     let mut opts = RenderOptions::from_scene(scene);
-    opts.width = 256;
-    opts.height = 256;
-    opts.sss = SssConfig {
-        method: SssMethod::Texture,
-        texture_padding: padding,
-        ..SssConfig::for_scene(scene)
-    };
+    opts.settings.width = 256;
+    opts.settings.height = 256;
+    opts.settings.sss.method = SssMethod::Texture;
+    opts.settings.sss.texture_padding = padding;
     opts
 }
 
@@ -284,7 +281,7 @@ fn head_texture_matches_reference() {
     );
     flip_against_reference("head-texture", &frame.image, 0.02, 0.1);
     let mut opts = texture_options(&scene, 4);
-    opts.transmittance.method = TransmittanceMethod::Tsm;
+    opts.settings.transmittance.method = TransmittanceMethod::Tsm;
     let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
     let frame = r.render().unwrap();
     flip_against_reference("head-texture-tsm", &frame.image, 0.02, 0.1);
@@ -350,7 +347,7 @@ fn head_seams_are_not_dark() {
     let Some(scene) = head_scene() else { return };
     let measure = |padding: u32| {
         let mut opts = texture_options(&scene, padding);
-        opts.sss.texture_size = 512;
+        opts.settings.sss.texture_size = 512;
         let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
         r.render().unwrap();
         let (irradiance, _, blurred) = r.texture_space_maps(0).unwrap();
@@ -396,7 +393,7 @@ fn small_sphere(light: [f32; 3]) -> Scene {
         far = 1.0
         [render]
         ambient = [0.0, 0.0, 0.0]
-        normal_shrink = 0.0001
+        transmittance = {{ normal_shrink = 0.0001 }}
         [[lights]]
         kind = "directional"
         position = [{x:?}, {y:?}, {z:?}]
@@ -422,14 +419,11 @@ fn tsm_transmits_through_a_backlit_sphere() {
     let scene_with_light = |z: f32| small_sphere([0.0, 0.0, z]);
     let render = |scene: &Scene, method: TransmittanceMethod| {
         let mut opts = RenderOptions::from_scene(scene);
-        opts.width = 64;
-        opts.height = 64;
-        opts.sss = SssConfig {
-            method: SssMethod::Texture,
-            texture_size: 256,
-            ..Default::default()
-        };
-        opts.transmittance.method = method;
+        opts.settings.width = 64;
+        opts.settings.height = 64;
+        opts.settings.sss.method = SssMethod::Texture;
+        opts.settings.sss.texture_size = 256;
+        opts.settings.transmittance.method = method;
         let mut r = Renderer::new(&ctx, scene, opts).unwrap();
         r.render().unwrap();
         r.read_diffuse().unwrap()
@@ -469,14 +463,11 @@ fn irradiance_view_shows_the_uv_map() {
     let scene = small_sphere([1.0, 0.5, 1.0]);
     let (w, h, size) = (128u32, 64u32, 64u32);
     let mut opts = RenderOptions::from_scene(&scene);
-    opts.width = w;
-    opts.height = h;
+    opts.settings.width = w;
+    opts.settings.height = h;
     opts.view = subsurface_render::DebugView::Irradiance;
-    opts.sss = SssConfig {
-        method: SssMethod::Texture,
-        texture_size: size,
-        ..Default::default()
-    };
+    opts.settings.sss.method = SssMethod::Texture;
+    opts.settings.sss.texture_size = size;
     let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
     let image = r.render().unwrap().image;
     let map = read4(&ctx, r.texture_space_maps(0).unwrap().0);

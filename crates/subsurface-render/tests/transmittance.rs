@@ -5,8 +5,8 @@ mod common;
 
 use common::{context, scene};
 use subsurface_profile::SumOfGaussians;
-use subsurface_render::passes::sss::{SssConfig, SssMethod};
-use subsurface_render::passes::transmittance::TransmittanceMethod;
+use subsurface_render::SssMethod;
+use subsurface_render::TransmittanceMethod;
 use subsurface_render::{DebugView, RenderOptions, Renderer, Scene};
 
 const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
@@ -27,7 +27,7 @@ fn backlit_material(object: &str, shadow_map_size: u32, profile: &str) -> Scene 
         far = 2.0
         [render]
         ambient = [0.0, 0.0, 0.0]
-        normal_shrink = {SHRINK}
+        transmittance = {{ normal_shrink = {SHRINK} }}
         [[lights]]
         kind = "directional"
         position = [0.0, 0.0, -1.0]
@@ -54,13 +54,10 @@ fn render_diffuse(
 ) -> (Vec<[f32; 4]>, Vec<f32>) {
     let ctx = context().unwrap();
     let mut opts = RenderOptions::from_scene(scene);
-    opts.width = w;
-    opts.height = h;
-    opts.sss = SssConfig {
-        method: SssMethod::None,
-        ..Default::default()
-    };
-    opts.transmittance.method = method;
+    opts.settings.width = w;
+    opts.settings.height = h;
+    opts.settings.sss.method = SssMethod::None;
+    opts.settings.transmittance.method = method;
     let mut r = Renderer::new(&ctx, scene, opts).unwrap();
     r.render().unwrap();
     (r.read_diffuse().unwrap(), r.read_linear_depth().unwrap())
@@ -213,9 +210,9 @@ fn transmittance_reddens_thin_parts_and_stays_finite() {
     let scene = Scene::default_scene();
     let render = |method| {
         let mut opts = RenderOptions::from_scene(&scene);
-        opts.width = 192;
-        opts.height = 108;
-        opts.transmittance.method = method;
+        opts.settings.width = 192;
+        opts.settings.height = 108;
+        opts.settings.transmittance.method = method;
         let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
         r.render().unwrap();
         (
@@ -309,8 +306,8 @@ fn thickness_view_shows_the_wedge_thickness() {
     let (w, h) = (256u32, 160u32);
     let render = |scene: &Scene, view: DebugView| {
         let mut opts = RenderOptions::from_scene(scene);
-        opts.width = w;
-        opts.height = h;
+        opts.settings.width = w;
+        opts.settings.height = h;
         opts.view = view;
         let mut r = Renderer::new(&ctx, scene, opts).unwrap();
         let frame = r.render().unwrap();

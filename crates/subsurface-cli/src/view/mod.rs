@@ -18,12 +18,13 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use subsurface_render::Scene;
 use subsurface_render::scene::DEFAULT_SCENE_TOML;
+use subsurface_render::{Scene, SssMethod};
 
 use crate::output::PendingFile;
-use crate::render::{SssArg, TransmittanceArg, ViewArg};
-use state::{ViewerState, transmittance_from_arg};
+use crate::render::ViewArg;
+use crate::settings_args::SettingsArgs;
+use state::ViewerState;
 
 #[derive(Args, Debug)]
 pub struct ViewArgs {
@@ -32,42 +33,16 @@ pub struct ViewArgs {
     /// Replace the scene's objects by this glTF/GLB model; the camera is re-aimed to frame it.
     #[arg(long, value_name = "FILE.glb")]
     pub model: Option<PathBuf>,
-    /// Window inner width in physical pixels (default: the scene's width in logical pixels).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Window inner height in physical pixels (default: the scene's height in logical pixels).
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Exposure in EV (stops) added to the scene's exposure.
-    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
     /// Debug view to start with.
     #[arg(long, value_enum)]
     pub view: Option<ViewArg>,
-    /// SSS method to start with (default: the scene's render.sss, separable).
-    #[arg(long, value_enum)]
-    pub sss: Option<SssArg>,
-    /// Separable: kernel taps (odd, 3..=63).
-    #[arg(long, value_name = "N")]
-    pub samples: Option<u32>,
-    /// Let the blur cross depth edges.
-    #[arg(long)]
-    pub no_follow_surface: bool,
-    /// Six-Gaussian: which of the five blurred Gaussians are on, five 0/1 values.
-    #[arg(long, value_name = "G1,..,G5", value_parser = crate::render::parse_gaussians)]
-    pub gaussians: Option<[bool; 5]>,
-    /// Transmittance method to start with (default: the scene's, else paper).
-    #[arg(long, value_enum)]
-    pub transmittance: Option<TransmittanceArg>,
-    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for thickness.
-    #[arg(long, value_name = "N")]
-    pub thickness_filter: Option<u32>,
-    /// Transmittance normal shrink in scene units (sets the scene's render.normal_shrink).
-    #[arg(long, value_name = "UNITS")]
-    pub normal_shrink: Option<f32>,
+    /// The scene's settings, overridden as `subsurface render` does; --width/--height give the
+    /// window's inner size in physical pixels (default: the scene's size in logical pixels).
+    #[command(flatten)]
+    pub settings: SettingsArgs,
     /// Start in split screen: the settings above on the left, this SSS method on the right.
-    #[arg(long, value_enum, value_name = "METHOD")]
-    pub compare: Option<SssArg>,
+    #[arg(long, value_name = "METHOD")]
+    pub compare: Option<SssMethod>,
     /// Present without waiting for vertical sync (frame times then show the GPU's pace).
     #[arg(long)]
     pub no_vsync: bool,
@@ -108,62 +83,20 @@ fn initial_state(args: &ViewArgs) -> Result<(ViewerState, Scene)> {
         scene.replace_model(m)?;
         state.desc = scene.desc.clone();
     }
-    let a = &mut state.a;
-    if let Some(s) = args.sss {
-        a.sss = s.into();
-    }
-    if let Some(n) = args.samples {
-        a.samples = n;
-    }
-    if args.no_follow_surface {
-        a.follow_surface = false;
-    }
-    if let Some(g) = args.gaussians {
-        a.gaussians = g;
-    }
-    if let Some(t) = args.transmittance {
-        a.transmittance = transmittance_from_arg(t);
-    }
-    if let Some(f) = args.thickness_filter {
-        a.thickness_filter = f;
-    }
+    // One overlay for render, bench and view: the flags go into the scene, and the viewer's
+    // main side starts from its settings.
+    let window = state.desc.render.clone();
+    args.settings.apply(&mut scene)?;
+    state.desc = scene.desc.clone();
+    (state.desc.render.width, state.desc.render.height) = (window.width, window.height);
+    state.a = state::Side::of(&scene.desc.render);
     if let Some(v) = args.view {
-        a.view = v.into();
-    }
-    if let Some(e) = args.exposure {
-        anyhow::ensure!(e.is_finite(), "--exposure: must be finite (got {e})");
-        state.desc.render.exposure_ev += e;
-    }
-    if let Some(n) = args.normal_shrink {
-        anyhow::ensure!(
-            n.is_finite() && n >= 0.0,
-            "--normal-shrink: must be finite and >= 0 (got {n})"
-        );
-        state.desc.render.normal_shrink = n;
+        state.a.view = v.into();
     }
     if let Some(c) = args.compare {
         state.compare = true;
-        state.b = state::Side {
-            sss: c.into(),
-            ..state.a.clone()
-        };
-    }
-    for (name, v) in [("--width", args.width), ("--height", args.height)] {
-        if let Some(v) = v {
-            anyhow::ensure!(
-                (1..=16384).contains(&v),
-                "{name}: must be in 1..=16384 (got {v})"
-            );
-        }
-    }
-    // Flag values are checked here, before a window opens, with render's field names.
-    state
-        .options(&state.a)
-        .map_err(|e| anyhow::anyhow!("--{}", e.to_string().replace('_', "-")))?;
-    if state.compare {
-        state
-            .options(&state.b)
-            .map_err(|e| anyhow::anyhow!("--compare: {e}"))?;
+        state.b = state.a.clone();
+        state.b.sss.method = c;
     }
     Ok((state, scene))
 }
@@ -197,7 +130,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         save_scene: args.save_scene.clone(),
         lose_device_at: args.lose_device_at,
     });
-    let size: winit::dpi::Size = match (args.width, args.height) {
+    let size: winit::dpi::Size = match (args.settings.width, args.settings.height) {
         (None, None) => {
             winit::dpi::LogicalSize::new(state.desc.render.width, state.desc.render.height).into()
         }

@@ -247,16 +247,6 @@ impl Model {
         }
     }
 
-    /// Kernel strength/falloff edits go to every skin material: `render` takes the kernel of
-    /// the first one, and the saved scene should not depend on which that is.
-    pub fn set_kernel(&mut self, strength: [f32; 3], falloff: [f32; 3]) {
-        for o in &mut self.state.desc.objects {
-            o.material.kernel_strength = strength;
-            o.material.falloff = falloff;
-        }
-        self.dirty.update = true;
-    }
-
     /// Copies the scene description's edits into the loaded scene the renderer reads.
     /// Errors (a value out of range) leave the renderer on the last good state.
     pub fn sync_scene(&mut self) -> Result<()> {

@@ -2,9 +2,8 @@
 
 use egui::{Color32, ComboBox, DragValue, PointerButton, RichText, Sense, Slider, Ui};
 use subsurface_render::DebugView;
-use subsurface_render::passes::sss::SssMethod;
-use subsurface_render::passes::transmittance::TransmittanceMethod;
 use subsurface_render::scene::LightKind;
+use subsurface_render::{SssMethod, TransmittanceMethod};
 
 use super::camera::{FlyInput, Mode};
 use super::model::{Level, Model, typed_path};
@@ -335,23 +334,23 @@ fn side_settings(ui: &mut Ui, id: &str, s: &mut Side) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("method");
-        changed |= method_combo(ui, &format!("{id} method"), &mut s.sss);
+        changed |= method_combo(ui, &format!("{id} method"), &mut s.sss.method);
     });
-    if s.sss == SssMethod::Separable {
-        changed |= odd_slider(ui, &mut s.samples, 3, 63, "samples");
+    if s.sss.method == SssMethod::Separable {
+        changed |= odd_slider(ui, &mut s.sss.samples, 3, 63, "samples");
     }
-    if s.sss == SssMethod::Gaussian6 {
+    if s.sss.method == SssMethod::Gaussian6 {
         ui.horizontal(|ui| {
             ui.label("Gaussians");
-            for (k, g) in s.gaussians.iter_mut().enumerate() {
+            for (k, g) in s.sss.gaussians.iter_mut().enumerate() {
                 changed |= ui.checkbox(g, format!("{}", k + 2)).changed();
             }
         });
     }
-    if s.sss != SssMethod::None {
+    if s.sss.method != SssMethod::None {
         changed |= ui
             .checkbox(
-                &mut s.follow_surface,
+                &mut s.sss.follow_surface,
                 "follow surface (stop at depth edges)",
             )
             .changed();
@@ -365,39 +364,6 @@ fn sss(ui: &mut Ui, m: &mut Model) {
         .show(ui, |ui| {
             if side_settings(ui, "a", &mut m.state.a) {
                 m.dirty.update = true;
-            }
-            let Some(first) = m
-                .state
-                .desc
-                .objects
-                .iter()
-                .find(|o| o.material.sss_strength > 0.0)
-                .map(|o| o.material.clone())
-            else {
-                ui.label("No skin object (sss_strength > 0).");
-                return;
-            };
-            if m.state.a.sss == SssMethod::Separable
-                || (m.state.compare && m.state.b.sss == SssMethod::Separable)
-            {
-                let (mut s, mut f) = (first.kernel_strength, first.falloff);
-                let mut changed = false;
-                ui.label("separable kernel (all skin materials)");
-                for (c, name) in ["R", "G", "B"].iter().enumerate() {
-                    ui.horizontal(|ui| {
-                        changed |= ui
-                            .add(Slider::new(&mut s[c], 0.0..=1.0).text(format!("strength {name}")))
-                            .changed();
-                    });
-                }
-                for (c, name) in ["R", "G", "B"].iter().enumerate() {
-                    changed |= ui
-                        .add(Slider::new(&mut f[c], 0.0..=1.0).text(format!("falloff {name}")))
-                        .changed();
-                }
-                if changed {
-                    m.set_kernel(s, f);
-                }
             }
         });
 }
@@ -444,6 +410,27 @@ fn material(ui: &mut Ui, m: &mut Model) {
             );
             ui.add(Slider::new(&mut mat.roughness, 0.05..=1.0).text("roughness"));
             ui.add(Slider::new(&mut mat.specular, 0.0..=1.0).text("specular"));
+            // Each material has its own separable kernel; unset values show the defaults of
+            // its kind of profile and become its own once moved.
+            let skin = subsurface_profile::material(&mat.profile)
+                .is_ok_and(|p| matches!(p, subsurface_profile::Material::Gaussians { .. }));
+            let (mut ks, mut kf) = mat.kernel_params(skin);
+            let mut moved = false;
+            ui.label("separable kernel");
+            for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                moved |= ui
+                    .add(Slider::new(&mut ks[c], 0.0..=1.0).text(format!("strength {name}")))
+                    .changed();
+            }
+            for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                moved |= ui
+                    .add(Slider::new(&mut kf[c], 0.0..=1.0).text(format!("falloff {name}")))
+                    .changed();
+            }
+            if moved {
+                mat.kernel_strength = Some(ks);
+                mat.falloff = Some(kf);
+            }
             m.material_edited(&before);
         });
 }
@@ -455,9 +442,10 @@ fn transmittance(ui: &mut Ui, m: &mut Model) {
             let mut changed = false;
             ui.horizontal(|ui| {
                 ui.label("method");
-                changed |= transmittance_combo(ui, "a transmittance", &mut m.state.a.transmittance);
+                changed |=
+                    transmittance_combo(ui, "a transmittance", &mut m.state.a.transmittance.method);
             });
-            let ns = &mut m.state.desc.render.normal_shrink;
+            let ns = &mut m.state.a.transmittance.normal_shrink;
             let speed = ns.max(1e-4) * 0.02;
             changed |= ui
                 .add(
@@ -469,7 +457,7 @@ fn transmittance(ui: &mut Ui, m: &mut Model) {
                 .changed();
             changed |= odd_slider(
                 ui,
-                &mut m.state.a.thickness_filter,
+                &mut m.state.a.transmittance.thickness_filter,
                 1,
                 15,
                 "thickness filter",
@@ -516,26 +504,22 @@ fn compare(ui: &mut Ui, m: &mut Model) {
                 .changed();
             ui.horizontal(|ui| {
                 if ui.button("main | SSS off").clicked() {
-                    if m.state.a.sss == SssMethod::None {
-                        m.state.a.sss = SssMethod::Separable;
+                    if m.state.a.sss.method == SssMethod::None {
+                        m.state.a.sss.method = SssMethod::Separable;
                     }
-                    m.state.b = Side {
-                        sss: SssMethod::None,
-                        ..m.state.a.clone()
-                    };
+                    m.state.b = m.state.a.clone();
+                    m.state.b.sss.method = SssMethod::None;
                     m.state.compare = true;
                     changed = true;
                 }
                 if ui.button("main | other method").clicked() {
-                    let other = if m.state.a.sss == SssMethod::Gaussian6 {
+                    let other = if m.state.a.sss.method == SssMethod::Gaussian6 {
                         SssMethod::Separable
                     } else {
                         SssMethod::Gaussian6
                     };
-                    m.state.b = Side {
-                        sss: other,
-                        ..m.state.a.clone()
-                    };
+                    m.state.b = m.state.a.clone();
+                    m.state.b.sss.method = other;
                     m.state.compare = true;
                     changed = true;
                 }
@@ -544,12 +528,15 @@ fn compare(ui: &mut Ui, m: &mut Model) {
                 changed |= side_settings(ui, "b", &mut m.state.b);
                 ui.horizontal(|ui| {
                     ui.label("transmittance");
-                    changed |=
-                        transmittance_combo(ui, "b transmittance", &mut m.state.b.transmittance);
+                    changed |= transmittance_combo(
+                        ui,
+                        "b transmittance",
+                        &mut m.state.b.transmittance.method,
+                    );
                 });
                 changed |= odd_slider(
                     ui,
-                    &mut m.state.b.thickness_filter,
+                    &mut m.state.b.transmittance.thickness_filter,
                     1,
                     15,
                     "thickness filter",

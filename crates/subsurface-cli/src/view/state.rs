@@ -2,49 +2,34 @@
 //! takes (a scene description and `RenderOptions`) and to a scene file that `subsurface
 //! render` reproduces.
 //!
-//! Material, camera, light, exposure and method edits go into the scene description itself
-//! (`[render] sss, samples, follow_surface, gaussians, transmittance, thickness_filter`), so
-//! a saved scene is a plain scene file: `subsurface render FILE` reproduces the view with no
-//! flags.
+//! Material, camera, light and exposure edits go into the scene description itself; each side
+//! of a comparison holds a clone of the scene's `[render.sss]` and `[render.transmittance]`
+//! settings, and the main side's are saved back into them, so a saved scene is a plain scene
+//! file: `subsurface render FILE` reproduces the view with no flags.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use clap::ValueEnum;
-use subsurface_render::passes::sss::{SssConfig, SssMethod};
-use subsurface_render::passes::transmittance::{TransmittanceConfig, TransmittanceMethod};
 use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
-use subsurface_render::{DebugView, RenderOptions};
+use subsurface_render::{
+    DebugView, RenderOptions, RenderSettings, SssMethod, SssSettings, TransmittanceMethod,
+    TransmittanceSettings,
+};
 
-use crate::render::{SssArg, TransmittanceArg};
-
-/// Settings of one side of the comparison (the whole view when not comparing).
-#[derive(Clone, Debug, PartialEq)]
+/// Settings of one side of the comparison (the whole view when not comparing): clones of the
+/// scene's settings types, plus the debug view.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Side {
-    pub sss: SssMethod,
-    /// Separable: kernel taps (odd, 3..=63).
-    pub samples: u32,
-    pub follow_surface: bool,
-    /// Six-Gaussian: which of the five blurred Gaussians are on.
-    pub gaussians: [bool; 5],
-    pub transmittance: TransmittanceMethod,
-    /// Odd, 1..=15.
-    pub thickness_filter: u32,
+    pub sss: SssSettings,
+    pub transmittance: TransmittanceSettings,
     pub view: DebugView,
 }
 
-impl Default for Side {
-    /// What `subsurface render` uses without flags.
-    fn default() -> Self {
-        let sss = SssConfig::default();
-        let t = TransmittanceConfig::default();
+impl Side {
+    pub fn of(settings: &RenderSettings) -> Self {
         Self {
-            sss: sss.method,
-            samples: sss.samples,
-            follow_surface: sss.follow_surface,
-            gaussians: sss.gaussians_enabled,
-            transmittance: t.method,
-            thickness_filter: t.thickness_filter,
+            sss: settings.sss.clone(),
+            transmittance: settings.transmittance.clone(),
             view: DebugView::Final,
         }
     }
@@ -66,59 +51,30 @@ pub struct ViewerState {
 
 /// The SSS methods `subsurface render` offers, in its order.
 pub fn sss_methods() -> Vec<SssMethod> {
-    SssArg::value_variants()
-        .iter()
-        .map(|&a| SssMethod::from(a))
-        .collect()
+    SssMethod::ALL.to_vec()
 }
 
-/// The transmittance methods `subsurface render` offers, in its order. Matched to the
-/// renderer's enum by name (its serde names are the flag values), so new variants need no
-/// change here.
+/// The transmittance methods `subsurface render` offers, in its order.
 pub fn transmittance_methods() -> Vec<TransmittanceMethod> {
-    TransmittanceArg::value_variants()
-        .iter()
-        .map(|&a| transmittance_from_arg(a))
-        .collect()
-}
-
-pub fn transmittance_from_arg(t: TransmittanceArg) -> TransmittanceMethod {
-    t.to_possible_value()
-        .and_then(|v| {
-            serde_json::from_value(serde_json::Value::String(v.get_name().to_string())).ok()
-        })
-        .unwrap_or_default()
+    TransmittanceMethod::ALL.to_vec()
 }
 
 /// The flag value of a transmittance method (e.g. "seed-report").
 pub fn transmittance_name(t: TransmittanceMethod) -> String {
-    match serde_json::to_value(t) {
-        Ok(serde_json::Value::String(s)) => s,
-        _ => format!("{t:?}").to_lowercase(),
-    }
+    t.name().to_string()
 }
 
 impl ViewerState {
     pub fn new(desc: SceneDesc, base_dir: PathBuf) -> Self {
-        let r = &desc.render;
-        let a = Side {
-            sss: r.sss,
-            samples: r.samples,
-            follow_surface: r.follow_surface,
-            gaussians: r.gaussians,
-            transmittance: r.transmittance,
-            thickness_filter: r.thickness_filter,
-            ..Side::default()
-        };
+        let a = Side::of(&desc.render);
+        let mut b = a.clone();
+        b.sss.method = SssMethod::None;
         Self {
             desc,
             base_dir,
             a,
             compare: false,
-            b: Side {
-                sss: SssMethod::None,
-                ..Side::default()
-            },
+            b,
             split: 0.5,
         }
     }
@@ -161,16 +117,11 @@ impl ViewerState {
         format!("{header}\n{}", desc.to_toml_string())
     }
 
-    /// `desc` with the main side's methods in `[render]`.
+    /// `desc` with the main side's settings in `[render]`.
     pub fn desc_for_save(&self) -> SceneDesc {
         let mut d = self.desc.clone();
-        let r = &mut d.render;
-        r.sss = self.a.sss;
-        r.samples = self.a.samples;
-        r.transmittance = self.a.transmittance;
-        r.thickness_filter = self.a.thickness_filter;
-        r.follow_surface = self.a.follow_surface;
-        r.gaussians = self.a.gaussians;
+        d.render.sss = self.a.sss.clone();
+        d.render.transmittance = self.a.transmittance.clone();
         d
     }
 
@@ -207,49 +158,20 @@ impl ViewerState {
         d
     }
 
-    /// Kernel strength and falloff: the separable kernel is one per frame, taken from the
-    /// first skin material as `SssConfig::for_scene` does, so `render` picks the same.
-    fn kernel_params(&self) -> ([f32; 3], [f32; 3]) {
-        let d = SssConfig::default();
-        self.desc
-            .objects
-            .iter()
-            .find(|o| o.material.sss_strength > 0.0)
-            .map_or((d.strength, d.falloff), |o| {
-                (o.material.kernel_strength, o.material.falloff)
-            })
-    }
-
     /// Render options for one side, at the scene's size (the viewer keeps that at the
     /// window's size).
     pub fn options(&self, side: &Side) -> Result<RenderOptions> {
-        let r = &self.desc.render;
-        let (strength, falloff) = self.kernel_params();
-        let sss = SssConfig {
-            method: side.sss,
-            samples: side.samples,
-            strength,
-            falloff,
-            follow_surface: side.follow_surface,
-            gaussians_enabled: side.gaussians,
-            ..SssConfig::default()
+        let settings = RenderSettings {
+            sss: side.sss.clone(),
+            transmittance: side.transmittance.clone(),
+            ..self.desc.render.clone()
         };
-        sss.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-        let transmittance = TransmittanceConfig {
-            method: side.transmittance,
-            normal_shrink: r.normal_shrink,
-            thickness_filter: side.thickness_filter,
-        };
-        transmittance
+        settings
             .validate()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .map_err(|e| anyhow::anyhow!("render.{e}"))?;
         Ok(RenderOptions {
-            width: r.width,
-            height: r.height,
-            exposure_ev: r.exposure_ev,
+            settings,
             view: side.view,
-            sss,
-            transmittance,
             baseline_copy: false,
         })
     }
@@ -289,17 +211,22 @@ mod tests {
         let mut s =
             ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
         s.a = Side {
-            sss: SssMethod::Gaussian6,
-            samples: 25,
-            follow_surface: false,
-            gaussians: [true, false, true, true, false],
-            transmittance: TransmittanceMethod::Beer,
-            thickness_filter: 5,
+            sss: SssSettings {
+                method: SssMethod::Gaussian6,
+                samples: 25,
+                follow_surface: false,
+                gaussians: [true, false, true, true, false],
+                ..Default::default()
+            },
+            transmittance: TransmittanceSettings {
+                method: TransmittanceMethod::Beer,
+                thickness_filter: 5,
+                normal_shrink: 0.0007,
+            },
             view: DebugView::Final,
         };
         let d = &mut s.desc;
         d.render.exposure_ev = 1.25;
-        d.render.normal_shrink = 0.0007;
         d.render.width = 333;
         d.render.height = 211;
         d.camera.position = [0.1, 0.2, 0.45];
@@ -316,8 +243,8 @@ mod tests {
         m.sss_width = 1.7;
         m.translucency = 2.5;
         m.profile = "marble".into();
-        m.kernel_strength = [0.5, 0.3, 0.2];
-        m.falloff = [0.9, 0.4, 0.35];
+        m.kernel_strength = Some([0.5, 0.3, 0.2]);
+        m.falloff = Some([0.9, 0.4, 0.35]);
         s
     }
 
@@ -327,14 +254,8 @@ mod tests {
             ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
         let o = s.options(&s.a).unwrap();
         let scene = subsurface_render::Scene::default_scene();
-        let mut r = crate::render::options(&scene, None, None, None).unwrap();
-        r.sss = SssConfig::for_scene(&scene);
-        assert_eq!(o.sss, r.sss);
-        assert_eq!(o.transmittance, r.transmittance);
-        assert_eq!(
-            (o.width, o.height, o.exposure_ev),
-            (r.width, r.height, r.exposure_ev)
-        );
+        let r = RenderOptions::from_scene(&scene);
+        assert_eq!(o.settings, r.settings);
     }
 
     #[test]
@@ -352,8 +273,8 @@ mod tests {
         assert_eq!(back.desc, saved.desc_with_absolute_paths());
         assert_eq!(back.a, s.a);
         assert_eq!(
-            back.options(&back.a).unwrap().sss,
-            s.options(&s.a).unwrap().sss
+            back.options(&back.a).unwrap().settings,
+            s.options(&s.a).unwrap().settings
         );
         // Saving the loaded state again gives the same file.
         let file2 = dir.join("again.toml");
@@ -373,9 +294,7 @@ mod tests {
         #[derive(clap::Parser)]
         struct R {
             #[command(flatten)]
-            sss: crate::render::SssArgs,
-            #[command(flatten)]
-            t: crate::render::TransmittanceArgs,
+            settings: crate::settings_args::SettingsArgs,
         }
         let r = <R as clap::Parser>::try_parse_from(["render"]).unwrap();
         let mut scene = subsurface_render::Scene::from_desc(
@@ -385,8 +304,8 @@ mod tests {
         )
         .unwrap();
         let want = s.options(&s.a).unwrap();
-        assert_eq!(r.sss.apply(&mut scene).unwrap(), want.sss);
-        assert_eq!(r.t.config(&scene).unwrap(), want.transmittance);
+        r.settings.apply(&mut scene).unwrap();
+        assert_eq!(RenderOptions::from_scene(&scene).settings, want.settings);
         // The switches that used to live only in the viewer are scene keys now.
         assert!(text.contains("follow_surface = false"), "{text}");
         assert!(
@@ -409,7 +328,8 @@ mod tests {
 
     #[test]
     fn bad_scene_keys_are_one_line_errors() {
-        let text = DEFAULT_SCENE_TOML.replace("[render]", "[render]\ngaussians = [true, 1]");
+        let text =
+            DEFAULT_SCENE_TOML.replace("[render]", "[render.sss]\ngaussians = [true, 1]\n[render]");
         let e = ViewerState::from_toml_str(&text, PathBuf::from("."), "s.toml").unwrap_err();
         let msg = format!("{e:#}");
         assert!(

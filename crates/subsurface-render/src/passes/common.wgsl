@@ -34,7 +34,7 @@ struct Object {
     normal_matrix: mat4x4<f32>,
     albedo: vec4<f32>,     // rgb linear, a = roughness (Beckmann m)
     params: vec4<f32>,     // rho_s, sss strength, scene units per profile mm, translucency
-    flags: vec4<f32>,      // has albedo map, has normal map, has specular map, unused
+    flags: vec4<f32>,      // has albedo map, has normal map, has specular map, SSS profile index
     transmit: vec4<f32>,   // rgb = Beer-Lambert extinction (1/mm), a = T(s) LUT range in mm
 };
 

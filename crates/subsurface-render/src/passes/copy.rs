@@ -2,7 +2,7 @@
 
 use crate::timing::TimedPass;
 
-pub const SHADER: &str = include_str!("copy.wgsl");
+pub const SHADER: &str = concat!(include_str!("fullscreen.wgsl"), include_str!("copy.wgsl"));
 
 pub struct CopyPass {
     pipeline: wgpu::RenderPipeline,

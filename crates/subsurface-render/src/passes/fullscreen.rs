@@ -1,5 +1,6 @@
-//! The full-screen-triangle pipeline that the image passes (SSS, tone map, copy) share: each
-//! WGSL file declares `vs_fullscreen`, and only the fragment entry point and targets differ.
+//! The full-screen-triangle pipeline that the image passes (SSS, tone map, copy) share: their
+//! WGSL is `fullscreen.wgsl` (which declares `vs_fullscreen`) followed by their own, and only
+//! the fragment entry point and targets differ.
 
 /// A pipeline drawing one full-screen triangle (3 vertices, no vertex buffer) with
 /// `module`'s `vs_fullscreen` and the fragment entry point `fragment`. `layout: None` lets

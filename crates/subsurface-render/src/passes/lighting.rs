@@ -2,12 +2,18 @@
 //! maps, spot falloff, inverse-square attenuation and PCF-filtered linear-depth shadows. It
 //! writes diffuse and specular apart (only diffuse is blurred by subsurface scattering),
 //! linear depth and the per-pixel SSS strength.
+//!
+//! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
+//! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
+//! maps ([`maps::maps_layout`]). The texture-space pass draws its UV-space irradiance with the
+//! same three groups (`texture_space::irradiance`); this module knows nothing of it.
 
 use wgpu::util::DeviceExt;
 
 use crate::gpu::GpuContext;
 use crate::gpu_scene::GpuObject;
-use crate::passes::{texture_space, util};
+use crate::passes::maps;
+use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
@@ -18,7 +24,10 @@ pub const SHADER: &str = concat!(
 );
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
-pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+/// r = SSS strength, g = scene units per profile millimetre, b = profile index (exact in f16
+/// up to 2048), a unused. Half floats keep the four targets within the 32 bytes per sample
+/// every adapter allows.
+pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// What the lighting pass writes, and what screen-space SSS reads.
 pub struct LightingTargets {
@@ -51,10 +60,28 @@ impl LightingTargets {
     }
 }
 
+/// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas` in
+/// lighting.wgsl). Equal layouts are interchangeable, so other pipelines built on the lighting
+/// shader (the texture-space irradiance) may bind [`LightingPass::frame_bind_group`].
+pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX_FRAGMENT);
+    // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
+    let atlas = |binding| {
+        util::float_texture_entry(
+            binding,
+            wgpu::ShaderStages::FRAGMENT,
+            false,
+            wgpu::TextureViewDimension::D2Array,
+        )
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lighting frame"),
+        entries: &[uniform(0), uniform(1), atlas(2), atlas(3)],
+    })
+}
+
 pub struct LightingPass {
     pipeline: wgpu::RenderPipeline,
-    /// The same lighting with the mesh laid out by its uv (texture-space diffusion).
-    irradiance_pipeline: wgpu::RenderPipeline,
     frame_bind_group: wgpu::BindGroup,
     /// Group 2 for objects without texture-space maps.
     default_maps: wgpu::BindGroup,
@@ -71,8 +98,8 @@ impl LightingPass {
         lights: &LightsUniform,
         shadow_atlas: &wgpu::TextureView,
     ) -> Self {
-        let maps_layout = texture_space::maps_layout(&ctx.device);
-        let tsm = texture_space::dummy_tsm_view(&ctx.device);
+        let maps_layout = maps::maps_layout(&ctx.device);
+        let tsm = maps::dummy_tsm_view(&ctx.device);
         Self::with_maps(
             ctx,
             object_layout,
@@ -84,7 +111,7 @@ impl LightingPass {
         )
     }
 
-    /// `maps_layout` is [`texture_space::maps_layout`] (group 2, per object); `tsm_atlas` the
+    /// `maps_layout` is [`maps::maps_layout`] (group 2, per object); `tsm_atlas` the
     /// translucent shadow maps (`Rg32Float` array, same layers as `shadow_atlas`).
     pub fn with_maps(
         ctx: &GpuContext,
@@ -97,20 +124,7 @@ impl LightingPass {
     ) -> Self {
         let device = &ctx.device;
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
-        let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX_FRAGMENT);
-        // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
-        let atlas = |binding| {
-            util::float_texture_entry(
-                binding,
-                wgpu::ShaderStages::FRAGMENT,
-                false,
-                wgpu::TextureViewDimension::D2Array,
-            )
-        };
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lighting frame"),
-            entries: &[uniform(0), uniform(1), atlas(2), atlas(3)],
-        });
+        let frame_layout = frame_layout(device);
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera"),
             contents: bytemuck::bytes_of(camera),
@@ -161,27 +175,9 @@ impl LightingPass {
             depth_test: true,
         }
         .create(device);
-        let uv_module = util::wgsl_module(
-            device,
-            "texture_space.wgsl (irradiance)",
-            texture_space::SHADER,
-        );
-        let irradiance_pipeline = util::MeshPipeline {
-            label: "texture-space irradiance",
-            layout: &layout,
-            module: &uv_module,
-            vertex: "vs_irradiance",
-            fragment: "fs_irradiance",
-            targets: &[texture_space::MAP_FORMAT, texture_space::STRETCH_FORMAT],
-            // UV islands may be laid out with either winding; no depth (one surface per texel).
-            cull_mode: None,
-            depth_test: false,
-        }
-        .create(device);
-        let default_maps = texture_space::default_maps_bind_group(device, maps_layout);
+        let default_maps = maps::default_maps_bind_group(device, maps_layout);
         Self {
             pipeline,
-            irradiance_pipeline,
             default_maps,
             frame_bind_group,
             camera,
@@ -189,18 +185,15 @@ impl LightingPass {
         }
     }
 
-    /// Draws one object into UV space with the texture-space irradiance pipeline (the caller
-    /// begins the pass on the irradiance and stretch maps).
-    pub fn draw_uv_irradiance(
-        &self,
-        pass: &mut wgpu::RenderPass<'_>,
-        object: &GpuObject,
-        maps: &wgpu::BindGroup,
-    ) {
-        pass.set_pipeline(&self.irradiance_pipeline);
-        pass.set_bind_group(0, &self.frame_bind_group, &[]);
-        pass.set_bind_group(2, maps, &[]);
-        object.draw(pass);
+    /// Group 0 (see [`frame_layout`]): camera, lights, shadow maps, translucent shadow maps.
+    pub fn frame_bind_group(&self) -> &wgpu::BindGroup {
+        &self.frame_bind_group
+    }
+
+    /// Writes the per-frame uniforms (the camera and the lights).
+    pub fn prepare(&self, queue: &wgpu::Queue, camera: &CameraUniform, lights: &LightsUniform) {
+        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
+        queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
     }
 
     pub fn encode(

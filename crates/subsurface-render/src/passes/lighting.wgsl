@@ -32,7 +32,7 @@ struct GBuffer {
     @location(0) diffuse: vec4<f32>,
     @location(1) specular: vec4<f32>,
     @location(2) depth: f32,
-    @location(3) sss: vec2<f32>,
+    @location(3) sss: vec4<f32>,   // strength, scene units per profile mm, profile index
 };
 
 // Point lights keep six layers in the order +X, -X, +Y, -Y, +Z, -Z (see shadow.rs).
@@ -253,6 +253,6 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     }
     out.specular = vec4<f32>(s.specular, 1.0);
     out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
-    out.sss = vec2<f32>(object.params.y, object.params.z);
+    out.sss = vec4<f32>(object.params.y, object.params.z, object.flags.w, 0.0);
     return out;
 }

@@ -3,11 +3,13 @@
 pub mod copy;
 pub mod fullscreen;
 pub mod lighting;
+pub mod maps;
 pub mod shadow;
 pub mod sss;
 pub mod texture_space;
 pub mod tonemap;
 pub mod transmittance;
+pub mod tsm;
 pub mod util;
 
 /// Every WGSL program of the crate as compiled (name, full source). The naga unit test
@@ -18,5 +20,10 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("tonemap.wgsl", tonemap::SHADER),
     ("sss.wgsl", sss::SHADER),
     ("copy.wgsl", copy::SHADER),
-    ("texture_space.wgsl", texture_space::SHADER),
+    (
+        "texture_space/irradiance.wgsl",
+        texture_space::irradiance::SHADER,
+    ),
+    ("texture_space/blur.wgsl", texture_space::blur::SHADER),
+    ("tsm/tsm.wgsl", tsm::SHADER),
 ];

@@ -1,33 +1,38 @@
 // Screen-space subsurface scattering (Jimenez et al. 2009, GPU Pro 2010; Separable SSS 2015;
 // Hable et al. 2009's 13 taps). All passes share one rule for fetching a tap, written to match
-// subsurface_profile::oracle exactly: bilinear filtering of texels that were each corrected
-// first (non-skin texels and texels across a depth edge are pulled back to the centre colour).
-
-const MAX_TAPS: u32 = 64u;
+// subsurface_profile::oracle::screen exactly: bilinear filtering of texels that were each
+// corrected first (non-skin texels, texels of another profile and texels across a depth edge
+// are pulled back to the centre colour). Each pixel reads its kernel from the profile table
+// row its material wrote into the SSS target, so every material keeps its own profile.
 
 struct SssUniform {
-    dir: vec4<f32>,        // xy = pixel direction of a 1-D pass, z = sigma in mm (Gaussian passes)
-    params: vec4<f32>,     // focal length in px, edge_mm, follow surface (0/1), min sigma in px
-    counts: vec4<u32>,     // x = number of kernel taps
-    kernel: array<vec4<f32>, MAX_TAPS>, // separable: rgb weight, offset mm; hable: rgb, x, y in two entries
+    direction: vec2<f32>, // pixel direction of a 1-D pass
+    focal_px: f32,        // 0.5 * height / tan(fov_y / 2)
+    edge_mm: f32,         // depth difference on the skin that fully stops a tap
+    follow_surface: u32,
+    min_sigma_px: f32,    // six Gaussians: narrower ones are skipped
+    taps: u32,            // separable taps per profile
+    stride: u32,          // table rows per profile
+    hable: u32,           // first row of Hable's taps (two rows each: rgb weight, xy mm)
+    gaussians: u32,       // first row of the six Gaussians (rgb weight, variance mm^2)
+    gaussian: u32,        // six Gaussians: the Gaussian this pass blurs up to
+    previous: u32,        // and the one it starts from
+    profiles: u32,        // rows of the table
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 };
 
 @group(0) @binding(0) var<uniform> u: SssUniform;
 @group(0) @binding(1) var color_tex: texture_2d<f32>;
 @group(0) @binding(2) var depth_tex: texture_2d<f32>;
+// r = strength (0 = not skin), g = scene units per profile mm, b = profile row.
 @group(0) @binding(3) var sss_tex: texture_2d<f32>;
+@group(0) @binding(4) var<storage, read> table: array<vec4<f32>>;
 @group(0) @binding(5) var accum_tex: texture_2d<f32>;
 
-struct FullscreenOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    var out: FullscreenOut;
-    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
-    return out;
+fn profile_of(s: vec4<f32>) -> u32 {
+    return min(u32(max(s.b, 0.0) + 0.5), u.profiles - 1u);
 }
 
 struct Centre {
@@ -36,6 +41,8 @@ struct Centre {
     strength: f32,
     world_per_mm: f32,
     px_per_mm: f32,
+    profile: u32,
+    base: u32,            // the profile's first table row
 };
 
 fn centre(p: vec2<f32>) -> Centre {
@@ -43,29 +50,32 @@ fn centre(p: vec2<f32>) -> Centre {
     var c: Centre;
     c.color = textureLoad(color_tex, texel, 0).rgb;
     c.depth = textureLoad(depth_tex, texel, 0).r;
-    let s = textureLoad(sss_tex, texel, 0).rg;
+    let s = textureLoad(sss_tex, texel, 0);
     c.strength = s.r;
     c.world_per_mm = s.g;
+    c.profile = profile_of(s);
+    c.base = c.profile * u.stride;
     // Perspective-correct footprint: a millimetre on the skin covers focal / depth pixels per
     // scene unit, so the blur keeps its physical size at any distance and resolution. The
     // per-pixel strength scales it, as the alpha channel does in Jimenez's shaders.
-    c.px_per_mm = c.world_per_mm * u.params.x / max(c.depth, 1e-6) * c.strength;
+    c.px_per_mm = c.world_per_mm * u.focal_px / max(c.depth, 1e-6) * c.strength;
     return c;
 }
 
-// One texel's colour as a tap sees it: a texel that is not skin, or (with follow-surface) lies
-// on another surface, is pulled back to the centre colour, so neither background nor a
-// different surface bleeds in (no halo at silhouettes; the depth correction of Jimenez et al.
-// 2009 with the threshold in millimetres on the skin rather than a unitless constant).
+// One texel's colour as a tap sees it: a texel that is not skin, belongs to another profile
+// (another material), or (with follow-surface) lies on another surface, is pulled back to the
+// centre colour, so neither background nor a different material bleeds in (no halo at
+// silhouettes; the depth correction of Jimenez et al. 2009 with the threshold in millimetres
+// on the skin rather than a unitless constant).
 fn corrected(texel: vec2<i32>, c: Centre) -> vec3<f32> {
     let color = textureLoad(color_tex, texel, 0).rgb;
     let depth = textureLoad(depth_tex, texel, 0).r;
-    let strength = textureLoad(sss_tex, texel, 0).r;
+    let sss = textureLoad(sss_tex, texel, 0);
     var s = 0.0;
-    if (strength <= 0.0) {
+    if (sss.r <= 0.0 || profile_of(sss) != c.profile) {
         s = 1.0;
-    } else if (u.params.z > 0.5) {
-        s = min(abs(c.depth - depth) / (u.params.y * c.world_per_mm), 1.0);
+    } else if (u.follow_surface != 0u) {
+        s = min(abs(c.depth - depth) / (u.edge_mm * c.world_per_mm), 1.0);
     }
     return mix(color, c.color, s);
 }
@@ -101,25 +111,27 @@ fn fs_separable(in: FullscreenOut) -> @location(0) vec4<f32> {
     if (c.strength <= 0.0) {
         return vec4<f32>(c.color, 1.0);
     }
-    var sum = u.kernel[0].rgb * c.color;
-    let n = min(u.counts.x, MAX_TAPS);
-    for (var i = 1u; i < n; i++) {
-        let k = u.kernel[i];
-        sum += k.rgb * tap(in.clip.xy + u.dir.xy * (k.w * c.px_per_mm), c);
+    var sum = table[c.base].rgb * c.color;
+    for (var i = 1u; i < u.taps; i++) {
+        let k = table[c.base + i];
+        sum += k.rgb * tap(in.clip.xy + u.direction * (k.w * c.px_per_mm), c);
     }
     return vec4<f32>(sum, 1.0);
 }
 
 const G7_W = array<f32, 7>(0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006);
 
-fn gaussian7(p: vec2<f32>) -> vec3<f32> {
-    let c = centre(p);
+// The increment from the previous Gaussian to this pass's one, in the centre's own profile:
+// each Gaussian is the previous one blurred by the difference of variances (d'Eon).
+fn gaussian7(p: vec2<f32>, c: Centre) -> vec3<f32> {
     if (c.strength <= 0.0) {
         return c.color;
     }
-    let sigma_px = u.dir.z * c.px_per_mm;
+    let v_start = table[c.base + u.gaussians + u.previous].w;
+    let v_end = table[c.base + u.gaussians + u.gaussian].w;
+    let sigma_px = sqrt(max(v_end - v_start, 0.0)) * c.px_per_mm;
     // GPU Pro's distance-based removal: a sub-pixel Gaussian changes nothing visible.
-    if (sigma_px < u.params.w) {
+    if (sigma_px < u.min_sigma_px) {
         return c.color;
     }
     var sum = G7_W[3] * c.color;
@@ -127,7 +139,7 @@ fn gaussian7(p: vec2<f32>) -> vec3<f32> {
         if (j == 3) {
             continue;
         }
-        sum += G7_W[j] * tap(p + u.dir.xy * (f32(j - 3) * sigma_px), c);
+        sum += G7_W[j] * tap(p + u.direction * (f32(j - 3) * sigma_px), c);
     }
     return sum;
 }
@@ -135,7 +147,7 @@ fn gaussian7(p: vec2<f32>) -> vec3<f32> {
 // Six-Gaussian (2009 / GPU Pro): horizontal 7-tap pass of one Gaussian's variance increment.
 @fragment
 fn fs_gaussian(in: FullscreenOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(gaussian7(in.clip.xy), 1.0);
+    return vec4<f32>(gaussian7(in.clip.xy, centre(in.clip.xy)), 1.0);
 }
 
 struct GaussianAccumOut {
@@ -149,17 +161,20 @@ struct GaussianAccumOut {
 
 @fragment
 fn fs_gaussian_accumulate(in: FullscreenOut) -> GaussianAccumOut {
-    let b = vec4<f32>(gaussian7(in.clip.xy), 1.0);
+    let c = centre(in.clip.xy);
+    let b = vec4<f32>(gaussian7(in.clip.xy, c), 1.0);
     var out: GaussianAccumOut;
     out.blurred = b;
-    out.accum = vec4<f32>(b.rgb * u.kernel[0].rgb, 1.0);
+    out.accum = vec4<f32>(b.rgb * table[c.base + u.gaussians + u.gaussian].rgb, 1.0);
     return out;
 }
 
 // The narrowest Gaussian is the unblurred input times its weights: starts the accumulation.
 @fragment
 fn fs_copy(in: FullscreenOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(textureLoad(color_tex, vec2<i32>(in.clip.xy), 0).rgb * u.kernel[0].rgb, 1.0);
+    let texel = vec2<i32>(in.clip.xy);
+    let base = profile_of(textureLoad(sss_tex, texel, 0)) * u.stride;
+    return vec4<f32>(textureLoad(color_tex, texel, 0).rgb * table[base + u.gaussians].rgb, 1.0);
 }
 
 // Writes the accumulated result back into the diffuse target, on skin pixels only, so every
@@ -173,19 +188,19 @@ fn fs_resolve(in: FullscreenOut) -> @location(0) vec4<f32> {
     return vec4<f32>(textureLoad(accum_tex, texel, 0).rgb, 1.0);
 }
 
-// Hable et al. 2009: one 2-D pass with 13 jittered taps; kernel[2i] = rgb weight,
-// kernel[2i + 1].xy = offset in mm.
+// Hable et al. 2009: one 2-D pass with 13 jittered taps; row 2i = rgb weight, row 2i + 1 =
+// offset in mm, from the profile's first Hable row.
 @fragment
 fn fs_hable13(in: FullscreenOut) -> @location(0) vec4<f32> {
     let c = centre(in.clip.xy);
     if (c.strength <= 0.0) {
         return vec4<f32>(c.color, 1.0);
     }
-    var sum = u.kernel[0].rgb * c.color;
-    let n = min(u.counts.x, MAX_TAPS / 2u);
-    for (var i = 1u; i < n; i++) {
-        let w = u.kernel[2u * i].rgb;
-        let o = u.kernel[2u * i + 1u].xy;
+    let first = c.base + u.hable;
+    var sum = table[first].rgb * c.color;
+    for (var i = 1u; i < 13u; i++) {
+        let w = table[first + 2u * i].rgb;
+        let o = table[first + 2u * i + 1u].xy;
         sum += w * tap(in.clip.xy + o * c.px_per_mm, c);
     }
     return vec4<f32>(sum, 1.0);

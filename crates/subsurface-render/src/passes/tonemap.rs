@@ -6,7 +6,10 @@ use wgpu::util::DeviceExt;
 use crate::passes::util;
 use crate::timing::TimedPass;
 
-pub const SHADER: &str = include_str!("tonemap.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("fullscreen.wgsl"),
+    include_str!("tonemap.wgsl")
+);
 /// The output format the renderer uses for PNGs.
 pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 

@@ -16,18 +16,6 @@ const THICKNESS_RANGE_MM: f32 = 8.0;
 @group(0) @binding(3) var depth_tex: texture_2d<f32>;
 @group(0) @binding(4) var sss_tex: texture_2d<f32>;
 
-struct FullscreenOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
-    // One triangle that covers the screen: no vertex buffer needed.
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    var out: FullscreenOut;
-    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
-    return out;
-}
 
 // John Hable's filmic curve (Uncharted 2), normalised so that the white point maps to 1.
 fn hable(x: vec3<f32>) -> vec3<f32> {

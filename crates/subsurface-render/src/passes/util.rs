@@ -2,60 +2,12 @@
 //! 2-D textures and their views, mesh pipelines and render pass attachments. Only the values
 //! that differ between passes are parameters; everything else is what every pass used.
 
+pub use crate::gpu::layout::{float_texture_entry, sampler_entry, storage_entry, uniform_entry};
 use crate::gpu_scene::VERTEX_LAYOUT;
 
 /// The z-buffer of every depth-tested mesh pass; [`depth_buffer`] and [`MeshPipeline`] share it
 /// so that a pipeline always matches the buffer it is drawn with.
 const ZBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-/// A uniform buffer at `binding`, bound whole (no dynamic offset, size checked by the shader).
-pub fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// A single-sampled float texture at `binding`. `filterable: false` admits 32-bit float
-/// formats, which are not filterable without an optional feature; those are read with
-/// `textureLoad` or a non-filtering sampler.
-pub fn float_texture_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    filterable: bool,
-    view_dimension: wgpu::TextureViewDimension,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable },
-            view_dimension,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-/// A sampler at `binding`.
-pub fn sampler_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::SamplerBindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Sampler(ty),
-        count: None,
-    }
-}
 
 /// A WGSL shader module; `label` names it in validation errors.
 pub fn wgsl_module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {

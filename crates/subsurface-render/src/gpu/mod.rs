@@ -1,6 +1,8 @@
 //! Headless GPU context: adapter selection from wgpu's usual environment variables, a device
 //! with timestamp queries where available, and validation errors turned into `RenderError`s.
 
+pub mod layout;
+
 use std::sync::{Arc, Mutex};
 
 use crate::error::{RenderError, one_line};

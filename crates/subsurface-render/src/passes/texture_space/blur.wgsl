@@ -1,53 +1,9 @@
-// Texture-space diffusion (d'Eon et al.): appended to common.wgsl, lighting.wgsl and
-// transmittance.wgsl, so the UV-space irradiance uses the very same lights, shadows and
-// transmittance as the lighting pass. The blur passes bind group 0 at bindings 10-13 only.
+// Texture-space diffusion (d'Eon et al.), steps 2 and 3: the separable Gaussian blurs of the
+// irradiance map and the padding of the UV islands. Appended to fullscreen.wgsl
+// (`vs_fullscreen`); group 0, bindings 10-13. The CPU mirror is
+// `subsurface_profile::oracle::texture`.
 
-// ---- 1. Irradiance in UV space -------------------------------------------------------------
-
-// The mesh laid out by its texture coordinates: texel (x, y) of the map holds the surface at
-// uv = ((x, y) + 0.5) / size, so the map is sampled with the mesh's own uv.
-@vertex
-fn vs_irradiance(v: VertexIn) -> LitVarying {
-    var out: LitVarying;
-    let world = object.model * vec4<f32>(v.position, 1.0);
-    out.world = world.xyz;
-    out.clip = vec4<f32>(v.uv.x * 2.0 - 1.0, 1.0 - v.uv.y * 2.0, 0.0, 1.0);
-    out.normal = (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
-    out.tangent = vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
-    out.uv = v.uv;
-    return out;
-}
-
-struct IrradianceOut {
-    // rgb = albedo^pre x (irradiance + ambient + transmitted light), a = 1 (texel covered)
-    @location(0) irradiance: vec4<f32>,
-    // profile millimetres per texel along u and along v (the inverse of d'Eon's stretch)
-    @location(1) stretch: vec2<f32>,
-};
-
-@fragment
-fn fs_irradiance(in: LitVarying) -> IrradianceOut {
-    // Screen derivatives here are derivatives per texel of the map: the surface's size of one
-    // texel along u and along v, in profile millimetres (scene units per mm include the
-    // material's sss_width; the SSS strength widens the profile as in screen space).
-    let mm = object.params.z * max(object.params.y, 1e-6);
-    let stretch = vec2<f32>(length(dpdx(in.world)), length(dpdy(in.world))) / mm;
-    // No front or back here: the normal is the mesh's own.
-    let n_vertex = normalize(in.normal);
-    let n = shading_normal(in, n_vertex);
-    var albedo = object.albedo.rgb;
-    if (object.flags.x > 0.5) {
-        albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
-    }
-    let s = shade(in.world, n, n_vertex, n_vertex, 1.0, 0.0, false);
-    var out: IrradianceOut;
-    let pre = albedo_power(albedo, texture_space.params.z);
-    out.irradiance = vec4<f32>(pre * (s.irradiance + lights.ambient.rgb + s.transmitted), 1.0);
-    out.stretch = stretch;
-    return out;
-}
-
-// ---- 2. Separable Gaussian blurs in texture space --------------------------------------------
+// ---- Separable Gaussian blurs --------------------------------------------------------------
 
 struct BlurUniform {
     dir: vec4<f32>,     // xy = texel axis of this 1-D pass, z = sigma in profile mm
@@ -59,18 +15,6 @@ struct BlurUniform {
 @group(0) @binding(11) var blur_src: texture_2d<f32>;
 @group(0) @binding(12) var blur_stretch: texture_2d<f32>;
 @group(0) @binding(13) var blur_extra: texture_2d<f32>;
-
-struct TsFullscreen {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_ts_fullscreen(@builtin(vertex_index) i: u32) -> TsFullscreen {
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    var out: TsFullscreen;
-    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
-    return out;
-}
 
 // 7 taps one standard deviation apart (d'Eon's and the screen-space six-Gaussian weights).
 const TS_G7 = array<f32, 7>(0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006);
@@ -127,7 +71,7 @@ fn ts_blur(p: vec2<f32>) -> vec4<f32> {
 
 // Horizontal pass of one Gaussian's variance increment.
 @fragment
-fn fs_ts_blur(in: TsFullscreen) -> @location(0) vec4<f32> {
+fn fs_ts_blur(in: FullscreenOut) -> @location(0) vec4<f32> {
     return ts_blur(in.clip.xy);
 }
 
@@ -139,7 +83,7 @@ struct TsAccumOut {
 
 // Vertical pass: completes the Gaussian (kept for the next, wider one) and accumulates it.
 @fragment
-fn fs_ts_blur_accumulate(in: TsFullscreen) -> TsAccumOut {
+fn fs_ts_blur_accumulate(in: FullscreenOut) -> TsAccumOut {
     let b = ts_blur(in.clip.xy);
     var out: TsAccumOut;
     out.blurred = b;
@@ -149,12 +93,12 @@ fn fs_ts_blur_accumulate(in: TsFullscreen) -> TsAccumOut {
 
 // The narrowest Gaussian is the irradiance itself times its weights.
 @fragment
-fn fs_ts_copy(in: TsFullscreen) -> @location(0) vec4<f32> {
+fn fs_ts_copy(in: FullscreenOut) -> @location(0) vec4<f32> {
     let c = textureLoad(blur_src, vec2<i32>(in.clip.xy), 0);
     return vec4<f32>(c.rgb * blur.weight.rgb, c.a);
 }
 
-// ---- 3. Padding of the UV islands ----------------------------------------------------------
+// ---- Padding of the UV islands -------------------------------------------------------------
 
 struct TsDilateOut {
     @location(0) result: vec4<f32>,
@@ -165,7 +109,7 @@ struct TsDilateOut {
 // the nearest square ring around them (alpha 0.5 marks padding), so bilinear lookups at the
 // islands' borders never mix in black.
 @fragment
-fn fs_ts_dilate(in: TsFullscreen) -> TsDilateOut {
+fn fs_ts_dilate(in: FullscreenOut) -> TsDilateOut {
     let texel = vec2<i32>(in.clip.xy);
     var out: TsDilateOut;
     out.result = textureLoad(blur_src, texel, 0);
@@ -203,31 +147,4 @@ fn fs_ts_dilate(in: TsFullscreen) -> TsDilateOut {
         }
     }
     return out;
-}
-
-// ---- 4. Translucent shadow maps ------------------------------------------------------------
-
-struct TsmView {
-    view_proj: mat4x4<f32>,
-};
-
-@group(0) @binding(14) var<uniform> tsm_view: TsmView;
-
-struct TsmOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) uv: vec2<f32>,
-};
-
-@vertex
-fn vs_tsm(v: VertexIn) -> TsmOut {
-    var out: TsmOut;
-    out.clip = tsm_view.view_proj * (object.model * vec4<f32>(v.position, 1.0));
-    out.uv = v.uv;
-    return out;
-}
-
-// The (u, v) of the surface nearest the light, beside the standard map's linear distance.
-@fragment
-fn fs_tsm(in: TsmOut) -> @location(0) vec2<f32> {
-    return in.uv;
 }

@@ -7,6 +7,8 @@
 //!   of pixel `(x, y)` is `c = (x + 0.5, y + 0.5)` in pixel units; pixel-space
 //!   positions `p` below use the same convention (`+y` points down the image).
 //! * A pixel with `strength == 0` is copied bit for bit.
+//! * Each pixel names its profile (`profile`, an index into the table of
+//!   [`ScreenKernels`] every pass takes) and is blurred with that profile's kernel.
 //! * At a blurred pixel: `colorM` = the pass input's colour there, `dM` = depth,
 //!   `m` = strength, `wpm` = world units per profile millimetre, and
 //!   `px_per_mm = wpm * focal_px / dM * m`. Dividing by depth keeps the blur a
@@ -18,15 +20,15 @@
 //!   `lerp(color, colorM, s)` of 003_*'s `BlurPS`, per texel): `s = 1` if the
 //!   texel's strength is 0 (no background colour bleeds in); else
 //!   `s = min(|dM - depth_texel| / (edge_mm * wpm), 1)` with `follow_surface`,
-//!   else `s = 0`; `texel = texel + (colorM - texel) * s`. Texels of zero weight
+//!   else `s = 0`; `texel = texel + (colorM - texel) * s`. A texel of another
+//!   profile counts as not skin (`s = 1`): no kernel mixes two materials. Texels of zero weight
 //!   are skipped. 003_* filters colour but point-samples depth, which lets up to
 //!   half of a texel across an edge leak into a tap; correcting per texel leaks
 //!   nothing. [`sample_bilinear`] and [`nearest_index`] remain as helpers.
 //! * Sums run in the order documented per pass, in f32.
 
 use crate::error::{ProfileError, Result, finite, in_range, positive};
-use crate::gaussian::SumOfGaussians;
-use crate::kernel::{GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS, hable13_kernel};
+use crate::kernel::{GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS, ScreenKernels};
 
 /// G-buffer data the passes read.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,6 +43,8 @@ pub struct ScreenInput {
     pub strength: Vec<f32>,
     /// Scene units per profile millimetre (> 0 where `strength > 0`).
     pub world_per_mm: Vec<f32>,
+    /// Index of each pixel's profile in the kernel table.
+    pub profile: Vec<u32>,
 }
 
 /// Camera and correction settings.
@@ -73,6 +77,7 @@ impl ScreenInput {
             depth: vec![depth; n],
             strength: vec![strength; n],
             world_per_mm: vec![world_per_mm; n],
+            profile: vec![0; n],
         }
     }
 
@@ -87,6 +92,7 @@ impl ScreenInput {
             ("depth", self.depth.len()),
             ("strength", self.strength.len()),
             ("world_per_mm", self.world_per_mm.len()),
+            ("profile", self.profile.len()),
         ] {
             if len != n {
                 return Err(ProfileError::Length {
@@ -109,6 +115,38 @@ impl ScreenInput {
         }
         Ok(())
     }
+}
+
+/// Every pixel's profile must name a row of `kernels`, and every row must have the same
+/// number of separable taps (one `samples` setting per frame).
+fn check_table(input: &ScreenInput, kernels: &[ScreenKernels]) -> Result<()> {
+    if kernels.is_empty() {
+        return Err(ProfileError::Invalid {
+            field: "kernels".into(),
+            reason: "the profile table is empty".into(),
+        });
+    }
+    for k in kernels {
+        check_kernel(&k.separable)?;
+        if k.separable.len() != kernels[0].separable.len() {
+            return Err(ProfileError::Invalid {
+                field: "kernels".into(),
+                reason: "every profile needs the same number of separable taps".into(),
+            });
+        }
+    }
+    if let Some((i, p)) = input
+        .profile
+        .iter()
+        .enumerate()
+        .find(|(_, p)| **p as usize >= kernels.len())
+    {
+        return Err(ProfileError::Invalid {
+            field: format!("profile[{i}]"),
+            reason: format!("{p} is not below the table size {}", kernels.len()),
+        });
+    }
+    Ok(())
 }
 
 impl ScreenParams {
@@ -159,6 +197,7 @@ struct Centre {
     depth: f32,
     wpm: f32,
     px_per_mm: f32,
+    profile: u32,
 }
 
 impl Centre {
@@ -172,6 +211,7 @@ impl Centre {
             depth,
             wpm,
             px_per_mm: wpm * params.focal_px / depth * input.strength[i],
+            profile: input.profile[i],
         }
     }
 
@@ -185,7 +225,7 @@ impl Centre {
         j: usize,
     ) -> [f32; 3] {
         let c = color[j];
-        let s = if input.strength[j] == 0.0 {
+        let s = if input.strength[j] == 0.0 || input.profile[j] != self.profile {
             1.0
         } else if params.follow_surface {
             ((self.depth - input.depth[j]).abs() / (params.edge_mm * self.wpm)).min(1.0)
@@ -258,7 +298,7 @@ fn check_kernel(kernel: &[[f32; 4]]) -> Result<()> {
 fn separable_pass_on(
     input: &ScreenInput,
     color: &[[f32; 3]],
-    kernel: &[[f32; 4]],
+    kernels: &[ScreenKernels],
     dir: [f32; 2],
     params: &ScreenParams,
 ) -> Vec<[f32; 3]> {
@@ -268,6 +308,7 @@ fn separable_pass_on(
                 return color[i];
             }
             let c = Centre::new(input, color, params, i);
+            let kernel = &kernels[c.profile as usize].separable;
             let mut acc = [0.0; 3];
             accumulate(
                 &mut acc,
@@ -286,41 +327,41 @@ fn separable_pass_on(
 
 /// One 1-D pass of the Separable SSS blur of `input.color` along `dir`.
 ///
-/// `kernel` is `[r, g, b, offset_mm]` with the centre tap first (as
-/// [`crate::separable_kernel`] returns it). Per pixel:
+/// Each pixel's kernel is `kernels[profile].separable`, `[r, g, b, offset_mm]` with the
+/// centre tap first (as [`crate::separable_kernel`] returns it). Per pixel:
 /// `out = kernel[0].rgb * colorM + sum_{i >= 1} kernel[i].rgb * tap(c + dir * kernel[i].offset * px_per_mm)`,
 /// summed in kernel order. `kernel[0]`'s offset is ignored.
 pub fn separable_pass(
     input: &ScreenInput,
-    kernel: &[[f32; 4]],
+    kernels: &[ScreenKernels],
     dir: [f32; 2],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
     input.validate()?;
     params.validate()?;
-    check_kernel(kernel)?;
+    check_table(input, kernels)?;
     finite("dir.x", dir[0] as f64)?;
     finite("dir.y", dir[1] as f64)?;
-    Ok(separable_pass_on(input, &input.color, kernel, dir, params))
+    Ok(separable_pass_on(input, &input.color, kernels, dir, params))
 }
 
 /// The full separable blur: the horizontal pass (`dir = (1, 0)`) of
 /// `input.color`, then the vertical pass (`dir = (0, 1)`) of that result, with
-/// depth, strength and `world_per_mm` unchanged.
+/// depth, strength, `world_per_mm` and profiles unchanged.
 pub fn separable(
     input: &ScreenInput,
-    kernel: &[[f32; 4]],
+    kernels: &[ScreenKernels],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
-    let h = separable_pass(input, kernel, [1.0, 0.0], params)?;
-    Ok(separable_pass_on(input, &h, kernel, [0.0, 1.0], params))
+    let h = separable_pass(input, kernels, [1.0, 0.0], params)?;
+    Ok(separable_pass_on(input, &h, kernels, [0.0, 1.0], params))
 }
 
 /// One 7-tap Gaussian pass of standard deviation `sigma_mm` along `dir`.
 fn gauss7_pass(
     input: &ScreenInput,
     color: &[[f32; 3]],
-    sigma_mm: f32,
+    sigma_mm: &dyn Fn(u32) -> f32,
     dir: [f32; 2],
     params: &ScreenParams,
     min_sigma_px: f32,
@@ -331,7 +372,7 @@ fn gauss7_pass(
                 return color[i];
             }
             let c = Centre::new(input, color, params, i);
-            let sigma_px = sigma_mm * c.px_per_mm;
+            let sigma_px = sigma_mm(c.profile) * c.px_per_mm;
             if sigma_px < min_sigma_px {
                 return c.color;
             }
@@ -349,41 +390,53 @@ fn gauss7_pass(
 
 /// The sum-of-Gaussians blur of Jimenez et al. 2009 / GPU Pro (003_*).
 ///
-/// The profile's terms, sorted by variance `v_0 < ... < v_{K-1}`, have their
-/// weights normalised so each channel sums to 1. `blurred_0 = input.color`; for
-/// `k >= 1`, `blurred_k = V(H(blurred_{k-1}))` with `sigma_mm = sqrt(v_k - v_{k-1})`
-/// (d'Eon's incremental convolution: each Gaussian is the previous one blurred
-/// further). A 1-D pass H (`dir (1,0)`) or V (`dir (0,1)`) is
+/// Each pixel's profile row `kernels[profile].gaussians` holds six Gaussians
+/// `[r, g, b, variance]` by increasing variance, weights summing to 1 per channel.
+/// `blurred_0 = input.color`; for each `k` in `1..6` whose switch `enabled[k - 1]` is on,
+/// `blurred_k = V(H(blurred_prev))` with `sigma_mm = sqrt(v_k - v_prev)`, `prev` the last
+/// Gaussian computed (d'Eon's incremental convolution: each Gaussian is the previous one
+/// blurred further; switching one off leaves the others at their true width). A 1-D pass
+/// H (`dir (1,0)`) or V (`dir (0,1)`) is
 /// `0.382 * colorM + sum_{j = -3..=3, j != 0} w_j * tap(c + dir * j * sigma_px)`,
-/// `w` = [`GAUSSIAN7_WEIGHTS`], `sigma_px = sigma_mm * px_per_mm`, summed for
-/// `j = -3, -2, -1, 1, 2, 3` after the centre; where `sigma_px < min_sigma_px`
+/// `w` = [`GAUSSIAN7_WEIGHTS`], `sigma_px = sigma_mm * px_per_mm` of the centre's profile,
+/// summed for `j = -3, -2, -1, 1, 2, 3` after the centre; where `sigma_px < min_sigma_px`
 /// the pass copies its input pixel (GPU Pro's removal of sub-pixel Gaussians).
-/// Result: `sum_k w_k * blurred_k` per channel, accumulated for `k = 0..K`;
-/// pixels with strength 0 keep the input colour exactly.
+/// Result: `w_0 * blurred_0 + sum_k w_k * blurred_k` per channel over the computed `k`, in
+/// that order, with each pixel's own weights; pixels with strength 0 keep the input colour.
 pub fn gaussian6(
     input: &ScreenInput,
-    profile: &SumOfGaussians,
+    kernels: &[ScreenKernels],
+    enabled: [bool; 5],
     params: &ScreenParams,
     min_sigma_px: f32,
 ) -> Result<Vec<[f32; 3]>> {
     input.validate()?;
     params.validate()?;
+    check_table(input, kernels)?;
     finite("min_sigma_px", min_sigma_px as f64)?;
-    let profile = profile.normalized()?;
-    let terms = profile.terms();
-    let weight = |k: usize| terms[k].weight.map(|w| w as f32);
+    let row = |i: usize, k: usize| kernels[input.profile[i] as usize].gaussians[k];
     let mut blurred = input.color.clone();
     let mut out: Vec<[f32; 3]> = vec![[0.0; 3]; blurred.len()];
-    for (o, &b) in out.iter_mut().zip(&blurred) {
-        accumulate(o, weight(0), b);
+    for (i, (o, &b)) in out.iter_mut().zip(&blurred).enumerate() {
+        let w = row(i, 0);
+        accumulate(o, [w[0], w[1], w[2]], b);
     }
-    for k in 1..terms.len() {
-        let sigma_mm = (terms[k].variance - terms[k - 1].variance).max(0.0).sqrt() as f32;
-        let h = gauss7_pass(input, &blurred, sigma_mm, [1.0, 0.0], params, min_sigma_px);
-        blurred = gauss7_pass(input, &h, sigma_mm, [0.0, 1.0], params, min_sigma_px);
-        for (o, &b) in out.iter_mut().zip(&blurred) {
-            accumulate(o, weight(k), b);
+
+    let mut previous = 0;
+    for k in (1..6).filter(|&k| enabled[k - 1]) {
+        let prev = previous;
+        let sigma = move |p: u32| {
+            let g = &kernels[p as usize].gaussians;
+            (g[k][3] - g[prev][3]).max(0.0).sqrt()
+        };
+        let h = gauss7_pass(input, &blurred, &sigma, [1.0, 0.0], params, min_sigma_px);
+        blurred = gauss7_pass(input, &h, &sigma, [0.0, 1.0], params, min_sigma_px);
+        for (i, (o, &b)) in out.iter_mut().zip(&blurred).enumerate() {
+            let w = row(i, k);
+            accumulate(o, [w[0], w[1], w[2]], b);
         }
+
+        previous = k;
     }
     for (i, o) in out.iter_mut().enumerate() {
         if input.strength[i] == 0.0 {
@@ -397,11 +450,16 @@ pub fn gaussian6(
 /// Table 1, whose positions are in mm on the skin and whose weights are
 /// normalised per channel ([`hable13_kernel`]; the raw table sums to 0.9977,
 /// 1.0494, 0.9996). `out = w_0 * colorM + sum_{i = 1..13} w_i * tap(c + (X_i, Y_i) * px_per_mm)`,
-/// in table order, with `+Y` down the image.
-pub fn hable13(input: &ScreenInput, params: &ScreenParams) -> Result<Vec<[f32; 3]>> {
+/// in table order, with `+Y` down the image. Each pixel uses its profile's row
+/// `kernels[profile].hable13` (for skin, that table itself).
+pub fn hable13(
+    input: &ScreenInput,
+    kernels: &[ScreenKernels],
+    params: &ScreenParams,
+) -> Result<Vec<[f32; 3]>> {
     input.validate()?;
     params.validate()?;
-    let kernel = hable13_kernel();
+    check_table(input, kernels)?;
     let color = &input.color;
     Ok((0..color.len())
         .map(|i| {
@@ -409,6 +467,7 @@ pub fn hable13(input: &ScreenInput, params: &ScreenParams) -> Result<Vec<[f32; 3
                 return color[i];
             }
             let c = Centre::new(input, color, params, i);
+            let kernel = &kernels[c.profile as usize].hable13;
             let mut acc = [0.0; 3];
             accumulate(
                 &mut acc,
@@ -432,7 +491,7 @@ pub fn hable13(input: &ScreenInput, params: &ScreenParams) -> Result<Vec<[f32; 3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernel::{KernelParams, separable_kernel};
+    use crate::kernel::KernelParams;
 
     const PARAMS: ScreenParams = ScreenParams {
         focal_px: 40.0,
@@ -440,21 +499,19 @@ mod tests {
         edge_mm: 1.0,
     };
 
-    fn skin_kernel() -> Vec<[f32; 4]> {
-        separable_kernel(&KernelParams::default()).unwrap()
+    fn skin() -> Vec<ScreenKernels> {
+        vec![ScreenKernels::skin(&KernelParams::default()).unwrap()]
     }
 
     type Method = fn(&ScreenInput) -> Vec<[f32; 3]>;
 
     fn methods() -> [(&'static str, Method); 3] {
         [
-            ("separable", |i| {
-                separable(i, &skin_kernel(), &PARAMS).unwrap()
-            }),
+            ("separable", |i| separable(i, &skin(), &PARAMS).unwrap()),
             ("gaussian6", |i| {
-                gaussian6(i, &SumOfGaussians::skin(), &PARAMS, 0.0).unwrap()
+                gaussian6(i, &skin(), [true; 5], &PARAMS, 0.0).unwrap()
             }),
-            ("hable13", |i| hable13(i, &PARAMS).unwrap()),
+            ("hable13", |i| hable13(i, &skin(), &PARAMS).unwrap()),
         ]
     }
 
@@ -523,7 +580,7 @@ mod tests {
     fn gaussian6_red_spreads_widest() {
         let mut input = ScreenInput::uniform(64, 64, [0.0; 3], 1.0, 1.0, 0.1);
         input.color[32 * 64 + 32] = [1.0; 3];
-        let out = gaussian6(&input, &SumOfGaussians::skin(), &PARAMS, 0.0).unwrap();
+        let out = gaussian6(&input, &skin(), [true; 5], &PARAMS, 0.0).unwrap();
         let mut m2 = [0.0f64; 3];
         for (i, p) in out.iter().enumerate() {
             let (dx, dy) = ((i % 64) as f64 - 32.0, (i / 64) as f64 - 32.0);
@@ -535,7 +592,7 @@ mod tests {
         // Per axis, the profile's variance is sum_k w_k (v_k - v_0) px^2, up to
         // the 7-tap kernel's own variance (1.08 sigma^2) and bilinear spreading.
         let ppm = 0.1 * 40.0;
-        let skin = SumOfGaussians::skin();
+        let skin = crate::SumOfGaussians::skin();
         let v0 = skin.terms()[0].variance;
         let expect: f64 = skin
             .terms()
@@ -554,12 +611,15 @@ mod tests {
     #[test]
     fn separable_pass_hand_computed() {
         // N = 3: offsets 0, -2, +2 mm. px_per_mm = 1 * 3 / 2 * m.
-        let k = separable_kernel(&KernelParams {
-            samples: 3,
-            strength: [1.0; 3],
-            falloff: [1.0; 3],
-        })
-        .unwrap();
+        let table = vec![
+            ScreenKernels::skin(&KernelParams {
+                samples: 3,
+                strength: [1.0; 3],
+                falloff: [1.0; 3],
+            })
+            .unwrap(),
+        ];
+        let k = table[0].separable.clone();
         let w = 9;
         let mut input = ScreenInput::uniform(w, 1, [0.0; 3], 2.0, 1.0, 1.0);
         for x in 0..w as usize {
@@ -571,7 +631,7 @@ mod tests {
             edge_mm: 1.0,
         };
         // m = 1: taps at exactly +-3 px land on texel centres.
-        let out = separable_pass(&input, &k, [1.0, 0.0], &params).unwrap();
+        let out = separable_pass(&input, &table, [1.0, 0.0], &params).unwrap();
         let x = 4usize;
         let c = |i: usize| input.color[i];
         for ch in 0..3 {
@@ -584,7 +644,7 @@ mod tests {
         }
         // m = 0.5 halves the footprint: taps at +-1.5 px average two texels.
         input.strength = vec![0.5; w as usize];
-        let out = separable_pass(&input, &k, [1.0, 0.0], &params).unwrap();
+        let out = separable_pass(&input, &table, [1.0, 0.0], &params).unwrap();
         let mid = |a: usize, b: usize, ch: usize| 0.5 * (c(a)[ch] + c(b)[ch]);
         for ch in 0..3 {
             let want = k[0][ch] * c(x)[ch] + k[1][ch] * mid(2, 3, ch) + k[2][ch] * mid(5, 6, ch);
@@ -631,11 +691,11 @@ mod tests {
         flat_params.follow_surface = false;
         type WithParams = fn(&ScreenInput, &ScreenParams) -> Vec<[f32; 3]>;
         let runs: [(&str, WithParams); 3] = [
-            ("separable", |i, p| separable(i, &skin_kernel(), p).unwrap()),
+            ("separable", |i, p| separable(i, &skin(), p).unwrap()),
             ("gaussian6", |i, p| {
-                gaussian6(i, &SumOfGaussians::skin(), p, 0.0).unwrap()
+                gaussian6(i, &skin(), [true; 5], p, 0.0).unwrap()
             }),
-            ("hable13", |i, p| hable13(i, p).unwrap()),
+            ("hable13", |i, p| hable13(i, &skin(), p).unwrap()),
         ];
         for (name, run) in runs {
             let leak_off = worst_leak(&far, &run(&far, &flat_params));
@@ -680,8 +740,8 @@ mod tests {
     fn sub_pixel_gaussians_are_skipped() {
         let mut input = ScreenInput::uniform(16, 16, [0.0; 3], 1.0, 1.0, 0.1);
         input.color[8 * 16 + 8] = [1.0; 3];
-        let skin = SumOfGaussians::skin();
-        let out = gaussian6(&input, &skin, &PARAMS, 1e6).unwrap();
+        let skin = skin();
+        let out = gaussian6(&input, &skin, [true; 5], &PARAMS, 1e6).unwrap();
         for (a, b) in out.iter().zip(&input.color) {
             for k in 0..3 {
                 assert!((a[k] - b[k]).abs() < 1e-6);
@@ -689,22 +749,22 @@ mod tests {
         }
         // px_per_mm = 4 here: sigma_px of the first step is sqrt(0.0484 - 0.0064) * 4 = 0.82,
         // of the second 2.0; a threshold of 1 px keeps only the wider steps.
-        let all = gaussian6(&input, &skin, &PARAMS, 0.0).unwrap();
-        let some = gaussian6(&input, &skin, &PARAMS, 1.0).unwrap();
+        let all = gaussian6(&input, &skin, [true; 5], &PARAMS, 0.0).unwrap();
+        let some = gaussian6(&input, &skin, [true; 5], &PARAMS, 1.0).unwrap();
         assert!(all[8 * 16 + 8][2] < some[8 * 16 + 8][2]);
     }
 
     #[test]
     fn bad_inputs_are_errors_not_panics() {
         let mut input = ScreenInput::uniform(4, 4, [1.0; 3], 1.0, 1.0, 1.0);
-        let k = skin_kernel();
+        let k = skin();
         input.depth.pop();
         let e = separable(&input, &k, &PARAMS).unwrap_err().to_string();
         assert_eq!(e, "depth: expected length 16 (got 15)");
         let mut input = ScreenInput::uniform(4, 4, [1.0; 3], 1.0, 1.0, 1.0);
         input.depth[5] = 0.0;
         assert!(
-            hable13(&input, &PARAMS)
+            hable13(&input, &k, &PARAMS)
                 .unwrap_err()
                 .to_string()
                 .starts_with("depth[5]: ")
@@ -712,7 +772,7 @@ mod tests {
         input.depth[5] = 1.0;
         input.strength[3] = 1.5;
         assert!(
-            gaussian6(&input, &SumOfGaussians::skin(), &PARAMS, 0.0)
+            gaussian6(&input, &skin(), [true; 5], &PARAMS, 0.0)
                 .unwrap_err()
                 .to_string()
                 .starts_with("strength[3]: ")
@@ -723,7 +783,7 @@ mod tests {
             ..PARAMS
         };
         assert!(
-            hable13(&input, &bad)
+            hable13(&input, &k, &bad)
                 .unwrap_err()
                 .to_string()
                 .starts_with("focal_px: ")
@@ -733,7 +793,7 @@ mod tests {
             ..PARAMS
         };
         assert!(
-            hable13(&input, &bad)
+            hable13(&input, &k, &bad)
                 .unwrap_err()
                 .to_string()
                 .starts_with("edge_mm: ")
@@ -742,11 +802,74 @@ mod tests {
             separable(&input, &[], &PARAMS)
                 .unwrap_err()
                 .to_string()
-                .starts_with("kernel: ")
+                .starts_with("kernels: ")
         );
         // Background pixels may carry any depth (e.g. 0 or infinity).
         input.strength[0] = 0.0;
         input.depth[0] = f32::INFINITY;
         assert!(separable(&input, &k, &PARAMS).is_ok());
+        // A pixel naming a profile the table does not have.
+        input.profile[2] = 1;
+        assert!(
+            separable(&input, &k, &PARAMS)
+                .unwrap_err()
+                .to_string()
+                .starts_with("profile[2]: ")
+        );
+    }
+
+    /// Two materials side by side at the same depth: each half is blurred with its own
+    /// profile, and a constant colour stays constant right up to the boundary (no tap takes
+    /// the other material's colour).
+    #[test]
+    fn profiles_do_not_mix_across_a_material_boundary() {
+        let (w, h) = (48u32, 8u32);
+        let mut input = ScreenInput::uniform(w, h, [1.0, 0.5, 0.25], 1.0, 1.0, 0.1);
+        for i in 0..(w * h) as usize {
+            if i % w as usize >= 24 {
+                input.color[i] = [0.2, 0.9, 0.6];
+                input.profile[i] = 1;
+            }
+        }
+        let wide = crate::SumOfGaussians::new(
+            crate::SumOfGaussians::skin()
+                .terms()
+                .iter()
+                .map(|t| crate::GaussianTerm {
+                    variance: t.variance * 9.0,
+                    weight: t.weight,
+                })
+                .collect(),
+        )
+        .unwrap();
+        let mut table = skin();
+        table.push(ScreenKernels::for_profile(&wide, &KernelParams::default()).unwrap());
+        for (name, out) in [
+            ("separable", separable(&input, &table, &PARAMS).unwrap()),
+            (
+                "gaussian6",
+                gaussian6(&input, &table, [true; 5], &PARAMS, 0.0).unwrap(),
+            ),
+            ("hable13", hable13(&input, &table, &PARAMS).unwrap()),
+        ] {
+            for (o, c) in out.iter().zip(&input.color) {
+                for k in 0..3 {
+                    assert!((o[k] - c[k]).abs() < 1e-5, "{name}: {o:?} vs {c:?}");
+                }
+            }
+        }
+        // With an impulse on each side, the wider profile spreads its light further: 11 to 15
+        // px (2.75 to 3.75 mm) from the impulse only the right half's kernel (3x as wide) reaches.
+        let mut input = ScreenInput::uniform(w, h, [0.0; 3], 1.0, 1.0, 0.1);
+        for i in 0..(w * h) as usize {
+            input.profile[i] = (i % w as usize >= 24) as u32;
+        }
+        input.color[4 * w as usize + 8] = [1.0; 3];
+        input.color[4 * w as usize + 32] = [1.0; 3];
+        let out = separable(&input, &table, &PARAMS).unwrap();
+        let row = 4 * w as usize;
+        let red = |from: usize| (from..from + 4).map(|x| out[row + x][0]).sum::<f32>();
+        assert_eq!(red(19), 0.0);
+        assert!(red(43) > 1e-4, "{:?}", &out[row + 43..row + 47]);
     }
 }

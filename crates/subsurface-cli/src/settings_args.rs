@@ -1,0 +1,266 @@
+//! The command line's overlay on a scene's settings, shared by every command that renders: each
+//! flag has the name and unit of the scene-file key it overrides (`--samples` is
+//! `render.sss.samples`, `--sss-width` is each material's `sss_width`), and one `apply` writes
+//! them all into the scene before it is validated as a whole.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use glam::{Mat4, Vec3};
+use subsurface_render::{Scene, SssMethod, TransmittanceMethod};
+
+#[derive(Args, Debug, Clone, Default)]
+pub struct SettingsArgs {
+    /// Image width in pixels [default: the scene's render.width, 1280].
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: the scene's render.height, 720].
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Exposure in stops, in place of the scene's render.exposure_ev [default: 0].
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    pub exposure_ev: Option<f32>,
+    /// Subsurface-scattering method: gaussian6 = Jimenez et al. 2009 / GPU Pro (the profile's
+    /// Gaussians, H+V 7-tap blurs each), separable = Jimenez et al. 2015 (one H and one V
+    /// pass), hable13 = Hable et al. 2009 (one 2-D pass of 13 taps), texture = d'Eon et al.
+    /// 2007 texture-space diffusion (per-object UV irradiance maps), none = no scattering.
+    /// Each material scatters with its own profile [default: the scene's render.sss.method,
+    /// separable].
+    #[arg(long, value_name = "METHOD")]
+    pub sss: Option<SssMethod>,
+    /// Separable: number of kernel taps, odd, 3..=63 [default: render.sss.samples, 17].
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u32>,
+    /// Let the blur cross depth edges (render.sss.follow_surface = false).
+    #[arg(long)]
+    pub no_follow_surface: bool,
+    /// Six Gaussians: which of the five blurred Gaussians to accumulate, five 0/1 values (e.g.
+    /// 1,1,0,1,1) [default: render.sss.gaussians, all].
+    #[arg(long, value_name = "G1,..,G5", value_parser = parse_gaussians)]
+    pub gaussians: Option<[bool; 5]>,
+    /// Texture space: size of each object's irradiance map in texels, 16..=16384 [default:
+    /// render.sss.texture_size, 1024].
+    #[arg(long, value_name = "N")]
+    pub texture_size: Option<u32>,
+    /// Multiplier on the physical size of every scattering material's profile (each
+    /// material's sss_width) [default: the materials' own, 1].
+    #[arg(long, value_name = "FACTOR")]
+    pub sss_width: Option<f32>,
+    /// Separable: per-channel share of scattered light R,G,B in 0..=1 for every scattering
+    /// material (kernel_strength) [default: the material's; skin 0.48,0.41,0.28].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub kernel_strength: Option<[f32; 3]>,
+    /// Separable: per-channel falloff R,G,B in 0..=1 for every scattering material
+    /// [default: the material's; skin 1,0.37,0.3].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub falloff: Option<[f32; 3]>,
+    /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
+    /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
+    /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
+    /// irradiance blurred in texture space, same T(s) as paper), diffusion = T(s) from diffusion
+    /// theory for the material's measured coefficients (multipole slab transmittance), off =
+    /// none [default: render.transmittance.method, paper].
+    #[arg(long, value_name = "METHOD")]
+    pub transmittance: Option<TransmittanceMethod>,
+    /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness
+    /// [default: render.transmittance.thickness_filter, 3].
+    #[arg(long, value_name = "N")]
+    pub thickness_filter: Option<u32>,
+    /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
+    /// [default: render.transmittance.normal_shrink, 0.005].
+    #[arg(long, value_name = "UNITS")]
+    pub normal_shrink: Option<f32>,
+}
+
+/// The flag that sets a `[render]` field (`sss.samples` -> `--samples`), for error messages.
+fn flag_of(field: &str) -> String {
+    let leaf = match field {
+        "sss.method" => "sss",
+        "transmittance.method" => "transmittance",
+        f => f.rsplit('.').next().unwrap_or(f),
+    };
+    let leaf = leaf.split('[').next().unwrap_or(leaf);
+    format!("--{}", leaf.replace('_', "-"))
+}
+
+impl SettingsArgs {
+    /// Writes the flags into the scene's settings and materials and checks the result; an
+    /// error names the flag.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        let r = &mut scene.desc.render;
+        macro_rules! set {
+            ($flag:expr, $field:expr) => {
+                if let Some(v) = $flag {
+                    $field = v;
+                }
+            };
+        }
+        set!(self.width, r.width);
+        set!(self.height, r.height);
+        set!(self.exposure_ev, r.exposure_ev);
+        set!(self.sss, r.sss.method);
+        set!(self.samples, r.sss.samples);
+        set!(self.gaussians, r.sss.gaussians);
+        set!(self.texture_size, r.sss.texture_size);
+        set!(self.transmittance, r.transmittance.method);
+        set!(self.thickness_filter, r.transmittance.thickness_filter);
+        set!(self.normal_shrink, r.transmittance.normal_shrink);
+        if self.no_follow_surface {
+            r.sss.follow_surface = false;
+        }
+        if let Err(e) = r.validate() {
+            anyhow::bail!("{}: {}", flag_of(&e.field), e.message);
+        }
+        if let Some(w) = self.sss_width {
+            anyhow::ensure!(
+                w.is_finite() && w > 0.0,
+                "--sss-width: must be finite and > 0 (got {w})"
+            );
+        }
+        for (flag, v) in [
+            ("--kernel-strength", self.kernel_strength),
+            ("--falloff", self.falloff),
+        ] {
+            if let Some(v) = v {
+                anyhow::ensure!(
+                    v.iter().all(|x| (0.0..=1.0).contains(x)),
+                    "{flag}: each value must be in 0..=1 (got {},{},{})",
+                    v[0],
+                    v[1],
+                    v[2]
+                );
+            }
+        }
+        scene.edit_materials(|m| {
+            if m.sss_strength > 0.0 {
+                if let Some(w) = self.sss_width {
+                    m.sss_width = w;
+                }
+                if self.kernel_strength.is_some() {
+                    m.kernel_strength = self.kernel_strength;
+                }
+                if self.falloff.is_some() {
+                    m.falloff = self.falloff;
+                }
+            }
+        });
+        Ok(())
+    }
+}
+
+/// Parses five comma-separated 0/1 values (the six-Gaussian switches).
+pub fn parse_gaussians(s: &str) -> Result<[bool; 5], String> {
+    let v: Vec<bool> = s
+        .split(',')
+        .map(|p| match p.trim() {
+            "1" => Ok(true),
+            "0" => Ok(false),
+            o => Err(format!("{o:?} is not 0 or 1")),
+        })
+        .collect::<Result<_, _>>()?;
+    v.try_into()
+        .map_err(|v: Vec<bool>| format!("expected five 0/1 values (got {})", v.len()))
+}
+
+/// Parses "r,g,b" into three finite floats.
+pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [r, g, b] if v.iter().all(|x| x.is_finite()) => Ok([*r, *g, *b]),
+        [_, _, _] => Err("values must be finite".into()),
+        _ => Err(format!(
+            "expected three comma-separated numbers R,G,B (got {s:?})"
+        )),
+    }
+}
+
+/// Loads the scene named on the command line (or the default) and applies `--model`.
+pub fn load_scene(scene: Option<&PathBuf>, model: Option<&PathBuf>) -> Result<Scene> {
+    let mut scene = match scene {
+        Some(p) => Scene::load_file(p)?,
+        None => Scene::default_scene(),
+    };
+    if let Some(m) = model {
+        scene.replace_model(m)?;
+    }
+    Ok(scene)
+}
+
+/// `n` copies of the scene's objects on a grid of ceil(sqrt(n)) columns, each scaled by
+/// 1/columns about the scene's centre, so the grid covers about the area of one character.
+pub fn replicate(scene: &Scene, n: u32) -> Scene {
+    if n <= 1 {
+        return scene.clone();
+    }
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let size = hi - lo;
+    let cols = (n as f32).sqrt().ceil() as u32;
+    let rows = n.div_ceil(cols);
+    let s = 1.0 / cols as f32;
+    let mut out = scene.clone();
+    out.objects.clear();
+    for k in 0..n {
+        let (c, r) = (k % cols, k / cols);
+        let cell = Vec3::new(
+            (c as f32 + 0.5) / cols as f32 - 0.5,
+            0.5 - (r as f32 + 0.5) / rows.max(cols) as f32,
+            0.0,
+        ) * Vec3::new(size.x, size.y, 0.0);
+        let m = Mat4::from_translation(centre + cell)
+            * Mat4::from_scale(Vec3::splat(s))
+            * Mat4::from_translation(-centre);
+        for o in &scene.objects {
+            let mut copy = o.clone();
+            copy.transform = m * o.transform;
+            out.objects.push(copy);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_name_the_keys_they_set() {
+        assert_eq!(flag_of("sss.samples"), "--samples");
+        assert_eq!(flag_of("sss.method"), "--sss");
+        assert_eq!(flag_of("transmittance.normal_shrink"), "--normal-shrink");
+        assert_eq!(flag_of("exposure_ev"), "--exposure-ev");
+        assert_eq!(flag_of("ambient[1]"), "--ambient");
+    }
+
+    #[test]
+    fn apply_overlays_settings_and_every_scattering_material() {
+        let mut scene = Scene::default_scene();
+        let args = SettingsArgs {
+            samples: Some(9),
+            sss: Some(SssMethod::Hable13),
+            sss_width: Some(2.0),
+            kernel_strength: Some([1.0, 0.5, 0.25]),
+            ..Default::default()
+        };
+        args.apply(&mut scene).unwrap();
+        assert_eq!(scene.desc.render.sss.samples, 9);
+        assert_eq!(scene.desc.render.sss.method, SssMethod::Hable13);
+        for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {
+            assert_eq!(o.material.sss_width, 2.0);
+            assert_eq!(d.material.sss_width, 2.0);
+            assert_eq!(o.material.kernel_strength, Some([1.0, 0.5, 0.25]));
+        }
+        let e = SettingsArgs {
+            samples: Some(4),
+            ..Default::default()
+        }
+        .apply(&mut scene)
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("--samples: must be odd"), "{e}");
+    }
+}

@@ -1,0 +1,295 @@
+//! Output destinations that are not plain files (symbolic links, FIFOs, devices, stdout), no
+//! partial files after errors or Ctrl-C, and one `error:` line with exit status 1 for every bad
+//! input, including what the argument parser rejects.
+//!
+//! `export-mitsuba` writes files without a GPU, so it stands in for `render` wherever the
+//! destination matters more than the content: `--out DIR` writes `DIR/meshes/*.ply` through
+//! temporary files and then `DIR/scene.xml`, which the tests make a link, FIFO or device.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn subsurface(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_subsurface"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("subsurface-outputs-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The single line on stderr, which must start with `error: `.
+fn error_line(out: &Output) -> String {
+    let s = String::from_utf8_lossy(&out.stderr).into_owned();
+    // lavapipe itself prints "error: XDG_RUNTIME_DIR is invalid" without a display; not ours.
+    let lines: Vec<&str> = s
+        .lines()
+        .filter(|l| !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one line on stderr, got: {s}");
+    assert!(lines[0].starts_with("error: "), "{s}");
+    assert!(lines[0].len() > "error: ".len() + 5, "{s}");
+    lines[0].to_string()
+}
+
+fn partial_files(dir: &Path) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".partial-"))
+        .collect()
+}
+
+fn assert_no_partial_files(dirs: &[&Path]) {
+    for d in dirs {
+        let p = partial_files(d);
+        assert!(p.is_empty(), "{}: {p:?} left behind", d.display());
+    }
+}
+
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let ok = Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "mkfifo {} failed", path.display());
+}
+
+#[test]
+fn parse_errors_exit_1_with_one_line() {
+    let dir = tempdir("parse");
+    let cases: &[(&[&str], &str)] = &[
+        (&["kernel", "--bogus"], "--bogus"),
+        (&["kernel", "--samples", "abc"], "abc"),
+        (&["kernel", "--samples"], "--samples"),
+        (&["export-mitsuba"], "--out"),
+        (&["no-such-command"], "no-such-command"),
+        (&[], "subcommand"),
+    ];
+    for (args, mentions) in cases {
+        let out = subsurface(args, &dir);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let line = error_line(&out);
+        assert!(line.contains(mentions), "{args:?}: {line}");
+        assert!(
+            !line.contains("Usage") && !line.contains("For more information"),
+            "{args:?}: {line}"
+        );
+        assert!(!line.starts_with("error: error"), "{line}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn help_and_version_exit_0() {
+    let dir = tempdir("help");
+    for args in [&["--help"][..], &["kernel", "--help"], &["--version"]] {
+        let out = subsurface(args, &dir);
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        assert!(out.stderr.is_empty(), "{args:?}");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("subsurface"), "{args:?}: {stdout}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_error_that_prints_its_cause_is_not_repeated() {
+    let dir = tempdir("repeat");
+    std::fs::write(
+        dir.join("s.toml"),
+        "[camera]\nposition = [0.0, 0.0, 1.0]\ntarget = [0.0, 0.0, 0.0]\n\
+         [[objects]]\nmesh = { gltf = \"missing.glb\" }\n[objects.material]\n",
+    )
+    .unwrap();
+    let out = subsurface(&["export-mitsuba", "s.toml", "--out", "x"], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let line = error_line(&out);
+    assert_eq!(line.matches("missing.glb").count(), 1, "{line}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symbolic_link_is_written_through_and_kept() {
+    let dir = tempdir("symlink");
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    std::fs::create_dir_all(dir.join("real")).unwrap();
+    std::os::unix::fs::symlink("../real/target.xml", dir.join("out/scene.xml")).unwrap();
+    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let link = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    assert!(link.file_type().is_symlink(), "the link was replaced");
+    let xml = std::fs::read_to_string(dir.join("real/target.xml")).unwrap();
+    assert!(xml.contains("<scene"), "{xml}");
+    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes"), &dir.join("real")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(unix)]
+#[test]
+fn a_link_into_a_missing_directory_fails_and_leaves_nothing() {
+    let dir = tempdir("dangling");
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    std::os::unix::fs::symlink("../nowhere/target.xml", dir.join("out/scene.xml")).unwrap();
+    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let line = error_line(&out);
+    assert!(
+        line.contains("scene.xml") && line.contains("nowhere") && line.contains("does not exist"),
+        "{line}"
+    );
+    // The meshes were written to temporary files before scene.xml failed.
+    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
+    let meshes: Vec<_> = std::fs::read_dir(dir.join("out/meshes")).unwrap().collect();
+    assert!(meshes.is_empty(), "{meshes:?}");
+    assert!(!dir.join("nowhere").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_output_in_a_missing_directory_fails_before_rendering() {
+    let dir = tempdir("missing");
+    // `render` checks its output before it looks for a GPU, so this needs none.
+    let out = subsurface(&["render", "--out", "nodir/x.png"], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let line = error_line(&out);
+    assert!(line.contains("nodir/x.png"), "{line}");
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_written_into() {
+    use std::os::unix::fs::FileTypeExt as _;
+    let dir = tempdir("fifo");
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    let fifo = dir.join("out/scene.xml");
+    mkfifo(&fifo);
+    let (tx, rx) = std::sync::mpsc::channel();
+    {
+        let fifo = fifo.clone();
+        // Left blocked (and ended with the test process) if the command never opens the FIFO.
+        std::thread::spawn(move || tx.send(std::fs::read(fifo).unwrap()));
+    }
+    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = rx.recv_timeout(Duration::from_secs(60)).unwrap();
+    assert!(String::from_utf8_lossy(&xml).contains("<scene"));
+    let m = std::fs::symlink_metadata(&fifo).unwrap();
+    assert!(m.file_type().is_fifo(), "the FIFO was replaced");
+    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_device_fails_with_one_line_and_stays_a_device() {
+    use std::os::unix::fs::FileTypeExt as _;
+    let dir = tempdir("full");
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    std::os::unix::fs::symlink("/dev/full", dir.join("out/scene.xml")).unwrap();
+    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let line = error_line(&out);
+    assert!(
+        line.contains("scene.xml: write failed") && line.contains("No space left"),
+        "{line}"
+    );
+    let m = std::fs::symlink_metadata("/dev/full").unwrap();
+    assert!(m.file_type().is_char_device());
+    let link = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    assert!(link.file_type().is_symlink());
+    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A FIFO nobody reads keeps `export-mitsuba` blocked in opening it, with the meshes' temporary
+/// files on disk: a reliably long run to interrupt.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_removes_partial_files() {
+    use std::os::unix::fs::FileTypeExt as _;
+    let dir = tempdir("sigint");
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    mkfifo(&dir.join("out/scene.xml"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_subsurface"))
+        .args(["export-mitsuba", "--out", "out"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let meshes = dir.join("out/meshes");
+    let start = Instant::now();
+    while partial_files(&meshes).is_empty() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("exited early ({status}) without blocking on the FIFO");
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no partial files appeared"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_no_partial_files(&[&dir.join("out"), &meshes]);
+    let m = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    assert!(m.file_type().is_fifo());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `render` needs an adapter; without one (and without SUBSURFACE_REQUIRE_GPU=1) this is skipped.
+#[test]
+fn dash_writes_the_png_to_stdout() {
+    let dir = tempdir("stdout");
+    let out = subsurface(
+        &["render", "--width", "8", "--height", "8", "--out", "-"],
+        &dir,
+    );
+    if !out.status.success() {
+        let require = std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1");
+        assert!(!require, "{}", String::from_utf8_lossy(&out.stderr));
+        eprintln!("skipped, no GPU: {}", String::from_utf8_lossy(&out.stderr));
+        return;
+    }
+    assert!(
+        out.stdout.starts_with(b"\x89PNG\r\n\x1a\n"),
+        "{:?}",
+        &out.stdout[..out.stdout.len().min(16)]
+    );
+    assert!(!dir.join("-").exists());
+    assert_no_partial_files(&[&dir]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,11 @@
+//! CPU reference ("oracle") implementations of every image pass: the GPU shaders are written
+//! to match these, and the GPU tests compare against them.
+//!
+//! * [`screen`]: the screen-space blurs (six Gaussians, Separable SSS, Hable's 13 taps), with
+//!   a profile per pixel.
+//! * [`texture`]: the texture-space (UV) blur of d'Eon et al. 2007.
+
+pub mod screen;
+pub mod texture;
+
+pub use screen::*;

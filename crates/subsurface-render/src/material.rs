@@ -1,0 +1,168 @@
+//! What the passes need of each material, GPU-free: its profile as Gaussians, its measured
+//! coefficients, and the screen-space profile table with each object's row in it.
+
+use std::collections::HashMap;
+
+use subsurface_profile::{Dipole, KernelParams, Material, ScreenKernels, SumOfGaussians, material};
+
+use crate::error::RenderError;
+use crate::scene::{MaterialDesc, Scene};
+
+/// A material's profile as Gaussians (fitted for measured materials), its extinction
+/// coefficient for Beer-Lambert, per millimetre, and its measured coefficients for
+/// diffusion-theory transmittance.
+#[derive(Clone, Debug)]
+pub struct MaterialOptics {
+    pub profile: SumOfGaussians,
+    pub sigma_t: [f32; 3],
+    pub dipole: Dipole,
+    /// The preset is d'Eon's skin Gaussians, for which the papers' own kernels exist.
+    pub is_skin_preset: bool,
+}
+
+/// Jensen et al. 2001's skin1 (sigma_a, sigma_s' in 1/mm, eta), what the Gaussian skin preset
+/// uses where measured coefficients are needed.
+fn skin1() -> Dipole {
+    match material("skin1") {
+        Ok(Material::Dipole { dipole, .. }) => dipole,
+        _ => unreachable!("skin1 is a measured preset"),
+    }
+}
+
+/// Looks materials up by name and fits measured ones once.
+#[derive(Default)]
+pub struct MaterialCache {
+    cache: HashMap<String, MaterialOptics>,
+}
+
+impl MaterialCache {
+    pub fn get(&mut self, name: &str, field: &str) -> Result<MaterialOptics, RenderError> {
+        if let Some(m) = self.cache.get(name) {
+            return Ok(m.clone());
+        }
+        let m = material(name).map_err(|e| RenderError::invalid(field, e.to_string()))?;
+        let optics = match &m {
+            Material::Gaussians { profile, .. } => {
+                let dipole = skin1();
+                MaterialOptics {
+                    profile: profile.clone(),
+                    sigma_t: [0, 1, 2]
+                        .map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32),
+                    dipole,
+                    is_skin_preset: true,
+                }
+            }
+            Material::Dipole { dipole, .. }
+            | Material::Multipole {
+                multipole: subsurface_profile::Multipole { dipole, .. },
+                ..
+            } => {
+                let fit = m
+                    .fit(6)
+                    .map_err(|e| RenderError::invalid(field, e.to_string()))?;
+                let sigma_t =
+                    [0, 1, 2].map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32);
+                MaterialOptics {
+                    profile: fit.profile,
+                    sigma_t,
+                    dipole: *dipole,
+                    is_skin_preset: false,
+                }
+            }
+        };
+        self.cache.insert(name.to_string(), optics.clone());
+        Ok(optics)
+    }
+}
+
+/// The screen-space kernels of one material: the skin preset gets the papers' own tables,
+/// a measured material kernels built from its fitted profile.
+pub fn screen_kernels(
+    optics: &MaterialOptics,
+    material: &MaterialDesc,
+    samples: u32,
+) -> Result<ScreenKernels, subsurface_profile::ProfileError> {
+    let (strength, falloff) = material.kernel_params(optics.is_skin_preset);
+    let params = KernelParams {
+        samples,
+        strength,
+        falloff,
+    };
+    if optics.is_skin_preset {
+        ScreenKernels::skin(&params)
+    } else {
+        ScreenKernels::for_profile(&optics.profile, &params)
+    }
+}
+
+/// The screen-space profile table of a scene: one row per distinct (profile, kernel strength,
+/// falloff) among its scattering materials, and each object's row. Objects that do not
+/// scatter get row 0 (the table always has one row, so the passes can bind it).
+#[derive(Clone, Debug)]
+pub struct ProfileTable {
+    pub kernels: Vec<ScreenKernels>,
+    /// One per `scene.objects`.
+    pub object_rows: Vec<u32>,
+}
+
+/// Most distinct profiles in one frame: the index is stored in a half float, exact to 2048.
+pub const MAX_PROFILES: usize = 1024;
+
+impl ProfileTable {
+    pub fn for_scene(
+        scene: &Scene,
+        samples: u32,
+        cache: &mut MaterialCache,
+    ) -> Result<Self, RenderError> {
+        let mut keys: Vec<(String, [u32; 6])> = Vec::new();
+        let mut kernels = Vec::new();
+        let mut object_rows = Vec::with_capacity(scene.objects.len());
+        for (i, o) in scene.objects.iter().enumerate() {
+            let m = &o.material;
+            if m.sss_strength <= 0.0 {
+                object_rows.push(0);
+                continue;
+            }
+            let field = format!("objects[{i}].material.profile");
+            let optics = cache.get(&m.profile, &field)?;
+            let (s, f) = m.kernel_params(optics.is_skin_preset);
+            let key = (
+                m.profile.clone(),
+                [s[0], s[1], s[2], f[0], f[1], f[2]].map(f32::to_bits),
+            );
+            let row = match keys.iter().position(|k| *k == key) {
+                Some(r) => r,
+                None => {
+                    if keys.len() == MAX_PROFILES {
+                        return Err(RenderError::invalid(
+                            field,
+                            format!("more than {MAX_PROFILES} distinct profiles in one frame"),
+                        ));
+                    }
+                    kernels.push(
+                        screen_kernels(&optics, m, samples)
+                            .map_err(|e| RenderError::invalid(field, e.to_string()))?,
+                    );
+                    keys.push(key);
+                    keys.len() - 1
+                }
+            };
+            object_rows.push(row as u32);
+        }
+        if kernels.is_empty() {
+            let skin = MaterialDesc::default();
+            kernels.push(
+                ScreenKernels::skin(&KernelParams {
+                    samples,
+                    strength: skin.kernel_params(true).0,
+                    falloff: skin.kernel_params(true).1,
+                })
+                .map_err(RenderError::from)?,
+            );
+        }
+        Ok(Self {
+            kernels,
+            object_rows,
+        })
+    }
+}

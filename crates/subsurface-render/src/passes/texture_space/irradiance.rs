@@ -1,0 +1,86 @@
+//! Step 1 of texture-space diffusion: each skin object's lights, shadows, ambient and
+//! transmittance evaluated with the mesh laid out by its texture coordinates, into an
+//! irradiance map ([`MAP_FORMAT`], alpha = covered) and a stretch map ([`STRETCH_FORMAT`]:
+//! profile millimetres per texel along u and v, from the derivatives of the world position).
+//!
+//! The shader is the lighting pass's (common.wgsl, lighting.wgsl, transmittance.wgsl) with
+//! irradiance.wgsl appended, and the pipeline takes the lighting pass's three bind groups:
+//! its frame bind group (group 0), the object's (group 1) and the object's maps (group 2).
+
+use crate::gpu_scene::{self, GpuObject};
+use crate::passes::lighting::{self, LightingPass};
+use crate::passes::maps::{MAP_FORMAT, STRETCH_FORMAT};
+use crate::passes::util;
+use crate::timing::TimedPass;
+
+pub const SHADER: &str = concat!(
+    include_str!("../common.wgsl"),
+    include_str!("../lighting.wgsl"),
+    include_str!("../transmittance.wgsl"),
+    include_str!("irradiance.wgsl")
+);
+
+/// The UV-space irradiance pipeline; shared by every object.
+pub struct IrradiancePass {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl IrradiancePass {
+    /// `maps_layout` is group 2 of the lighting pass ([`crate::passes::maps::maps_layout`]);
+    /// groups 0 and 1 are the lighting pass's frame layout and the objects' layout.
+    pub fn new(device: &wgpu::Device, maps_layout: &wgpu::BindGroupLayout) -> Self {
+        let frame_layout = lighting::frame_layout(device);
+        let object_layout = gpu_scene::object_layout(device);
+        let layout = util::pipeline_layout(
+            device,
+            "texture-space irradiance",
+            &[&frame_layout, &object_layout, maps_layout],
+        );
+        let module = util::wgsl_module(device, "texture_space/irradiance.wgsl", SHADER);
+        let pipeline = util::MeshPipeline {
+            label: "texture-space irradiance",
+            layout: &layout,
+            module: &module,
+            vertex: "vs_irradiance",
+            fragment: "fs_irradiance",
+            targets: &[MAP_FORMAT, STRETCH_FORMAT],
+            // UV islands may be laid out with either winding; no depth (one surface per texel).
+            cull_mode: None,
+            depth_test: false,
+        }
+        .create(device);
+        Self { pipeline }
+    }
+
+    /// Records one object's irradiance and stretch maps (`targets`, cleared first) with the
+    /// lighting pass's frame bindings (camera, lights, shadow maps) and the object's group 2
+    /// `maps`. Timed "texture".
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        lighting: &LightingPass,
+        object: &GpuObject,
+        maps: &wgpu::BindGroup,
+        targets: &[wgpu::TextureView; 2],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, "texture", encoder);
+        {
+            let attach =
+                |v| util::color_attachment(v, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("texture-space irradiance"),
+                color_attachments: &[attach(&targets[0]), attach(&targets[1])],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, lighting.frame_bind_group(), &[]);
+            pass.set_bind_group(2, maps, &[]);
+            object.draw(&mut pass);
+        }
+        timer.end(profiler, encoder);
+    }
+}

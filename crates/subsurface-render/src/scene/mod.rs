@@ -1,0 +1,231 @@
+//! Scene description (TOML, see `docs/scene-format.md`) and scene loading.
+//!
+//! [`SceneDesc`] is the raw, serialisable description ([`desc`], checked by [`validate`]);
+//! [`Scene`] is the loaded scene with meshes and textures decoded, ready for upload.
+
+mod desc;
+pub mod error;
+mod reframe;
+pub mod units;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+pub use desc::*;
+pub use error::SceneError;
+pub(crate) use error::one_line;
+
+use crate::mesh::{self, Mesh};
+
+/// Source of the embedded default scene.
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../default_scene.toml");
+
+/// A scene with meshes and textures decoded.
+#[derive(Clone)]
+pub struct Scene {
+    pub desc: SceneDesc,
+    /// One per `desc.objects`, same order.
+    pub objects: Vec<Object>,
+}
+
+/// A loaded object.
+#[derive(Clone)]
+pub struct Object {
+    pub name: String,
+    /// Object space (glTF node transforms baked in), with tangents.
+    pub mesh: Mesh,
+    /// Object -> world.
+    pub transform: glam::Mat4,
+    /// Millimetres per object-space unit (before `transform`'s scale).
+    pub mm_per_unit: f32,
+    /// `material.albedo` times the glTF base colour factor (if `use_gltf_color`).
+    pub albedo: [f32; 3],
+    /// sRGB-encoded colour texture.
+    pub albedo_texture: Option<image::RgbaImage>,
+    /// Linear tangent-space normal map.
+    pub normal_texture: Option<image::RgbaImage>,
+    /// Linear specular map.
+    pub specular_texture: Option<image::RgbaImage>,
+    pub material: MaterialDesc,
+}
+
+impl Object {
+    /// World-space AABB of the object.
+    pub fn world_bounds(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.mesh.bounds();
+        let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for k in 0..8 {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = self.transform.transform_point3(c);
+            out = (out.0.min(p), out.1.max(p));
+        }
+        out
+    }
+}
+
+/// Reads and decodes an image file as RGBA8.
+pub fn load_image(path: &Path) -> Result<image::RgbaImage, SceneError> {
+    let file = path.display().to_string();
+    let reader = image::ImageReader::open(path).map_err(|e| SceneError::Io {
+        file: file.clone(),
+        msg: one_line(&e.to_string()),
+    })?;
+    let reader = reader.with_guessed_format().map_err(|e| SceneError::Io {
+        file: file.clone(),
+        msg: one_line(&e.to_string()),
+    })?;
+    let img = reader.decode().map_err(|e| SceneError::Image {
+        file,
+        msg: one_line(&e.to_string()),
+    })?;
+    Ok(img.to_rgba8())
+}
+
+fn load_object(
+    o: &ObjectDesc,
+    index: usize,
+    base_dir: &Path,
+    file: &str,
+) -> Result<Object, SceneError> {
+    let ctx = |field: &str, e: SceneError| SceneError::Asset {
+        file: file.to_string(),
+        field: format!("objects[{index}].{field}"),
+        source: Box::new(e),
+    };
+    let m = &o.material;
+    let mut albedo = m.albedo;
+    let mut albedo_texture = None;
+    let mut normal_texture = None;
+    let mesh = match &o.mesh {
+        MeshDesc::Gltf { path } => {
+            let model = if path == BUILTIN_HAND {
+                mesh::load_gltf_slice(mesh::BUILTIN_HAND_GLB, "builtin:hand (right.glb)")
+            } else {
+                mesh::load_gltf(&base_dir.join(path))
+            }
+            .map_err(|e| ctx("mesh.gltf", e))?;
+            if m.use_gltf_color {
+                for (a, f) in albedo.iter_mut().zip(model.base_color_factor) {
+                    *a *= f;
+                }
+                albedo_texture = model.base_color_texture;
+            }
+            normal_texture = model.normal_texture;
+            model.mesh
+        }
+        MeshDesc::Slab {
+            width,
+            height,
+            thickness,
+        } => Mesh::slab(*width, *height, *thickness),
+        MeshDesc::Wedge {
+            length,
+            height,
+            max_thickness,
+        } => Mesh::wedge(*length, *height, *max_thickness),
+        MeshDesc::Sphere { radius, segments } => Mesh::sphere(*radius, *segments),
+    };
+    let tex = |field: &str, p: &Option<String>| -> Result<Option<image::RgbaImage>, SceneError> {
+        p.as_ref()
+            .map(|p| load_image(&base_dir.join(p)).map_err(|e| ctx(field, e)))
+            .transpose()
+    };
+    if let Some(t) = tex("material.albedo_texture", &m.albedo_texture)? {
+        albedo_texture = Some(t);
+    }
+    if let Some(t) = tex("material.normal_texture", &m.normal_texture)? {
+        normal_texture = Some(t);
+    }
+    let specular_texture = tex("material.specular_texture", &m.specular_texture)?;
+    Ok(Object {
+        name: if o.name.is_empty() {
+            format!("object{index}")
+        } else {
+            o.name.clone()
+        },
+        mesh,
+        transform: o.transform(),
+        mm_per_unit: o.mm_per_unit,
+        albedo,
+        albedo_texture,
+        normal_texture,
+        specular_texture,
+        material: m.clone(),
+    })
+}
+
+fn union(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> (Vec3, Vec3) {
+    (a.0.min(b.0), a.1.max(b.1))
+}
+
+impl Scene {
+    /// Reads, validates and loads a scene file; relative paths in it are
+    /// resolved against the file's directory.
+    pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+            file: name.clone(),
+            msg: one_line(&e.to_string()),
+        })?;
+        let desc = SceneDesc::from_toml_str(&text, &name)?;
+        let base = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        Scene::from_desc(desc, &base, &name)
+    }
+
+    /// Validates `desc` and loads its meshes and textures (paths relative to `base_dir`).
+    pub fn from_desc(
+        desc: SceneDesc,
+        base_dir: &Path,
+        name_for_errors: &str,
+    ) -> Result<Scene, SceneError> {
+        desc.validate(name_for_errors)?;
+        let objects = desc
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| load_object(o, i, base_dir, name_for_errors))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Scene { desc, objects })
+    }
+
+    /// The embedded default scene (backlit hand and wedge). Needs no files.
+    pub fn default_scene() -> Scene {
+        // Proven to load by the unit test `default_scene_loads`.
+        let desc = SceneDesc::from_toml_str(DEFAULT_SCENE_TOML, "<default scene>")
+            .expect("embedded default scene parses");
+        Scene::from_desc(desc, Path::new("."), "<default scene>")
+            .expect("embedded default scene loads")
+    }
+
+    /// Changes the material of every object, in the description and in the loaded objects
+    /// alike (the command line's per-material flags, the viewer's edits).
+    pub fn edit_materials(&mut self, mut edit: impl FnMut(&mut MaterialDesc)) {
+        for d in &mut self.desc.objects {
+            edit(&mut d.material);
+        }
+        for o in &mut self.objects {
+            edit(&mut o.material);
+        }
+    }
+
+    /// World-space AABB of all objects; `(0, 0)` if there are none.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.objects
+            .iter()
+            .map(Object::world_bounds)
+            .reduce(union)
+            .unwrap_or((Vec3::ZERO, Vec3::ZERO))
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,263 @@
+//! Parsing a scene file and checking every value (ranges in `docs/scene-format.md`).
+
+use glam::Vec3;
+
+use super::desc::{LightKind, MeshDesc, SceneDesc};
+use super::error::{SceneError, one_line};
+
+fn line_col(s: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(s.len());
+    let before = &s.as_bytes()[..offset];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
+    let col = s[line_start..offset].chars().count() + 1;
+    (line, col)
+}
+
+struct Check<'a> {
+    file: &'a str,
+}
+
+impl Check<'_> {
+    fn err(&self, field: impl Into<String>, msg: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.to_string(),
+            field: field.into(),
+            msg: msg.into(),
+        }
+    }
+    /// `x` must be finite and satisfy `ok`; `rule` reads e.g. "> 0".
+    fn num(&self, field: &str, x: f32, ok: bool, rule: &str) -> Result<(), SceneError> {
+        if x.is_finite() && ok {
+            Ok(())
+        } else if rule.is_empty() {
+            Err(self.err(field, format!("must be finite (got {x})")))
+        } else {
+            Err(self.err(field, format!("must be finite and {rule} (got {x})")))
+        }
+    }
+    fn finite(&self, field: &str, x: f32) -> Result<(), SceneError> {
+        self.num(field, x, true, "")
+    }
+    fn finite3(&self, field: &str, v: [f32; 3]) -> Result<(), SceneError> {
+        for (i, x) in v.into_iter().enumerate() {
+            self.finite(&format!("{field}[{i}]"), x)?;
+        }
+        Ok(())
+    }
+    fn nonneg3(&self, field: &str, v: [f32; 3]) -> Result<(), SceneError> {
+        for (i, x) in v.into_iter().enumerate() {
+            self.num(&format!("{field}[{i}]"), x, x >= 0.0, ">= 0")?;
+        }
+        Ok(())
+    }
+    fn unit3(&self, field: &str, v: [f32; 3]) -> Result<(), SceneError> {
+        for (i, x) in v.into_iter().enumerate() {
+            self.num(
+                &format!("{field}[{i}]"),
+                x,
+                (0.0..=1.0).contains(&x),
+                "in [0, 1]",
+            )?;
+        }
+        Ok(())
+    }
+    fn positive(&self, field: &str, x: f32) -> Result<(), SceneError> {
+        self.num(field, x, x > 0.0, "> 0")
+    }
+    fn path(&self, field: &str, p: &Option<String>) -> Result<(), SceneError> {
+        match p {
+            Some(p) if p.trim().is_empty() => Err(self.err(field, "must not be empty")),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl SceneDesc {
+    /// Parses and validates a scene. `name_for_errors` names the file in errors.
+    pub fn from_toml_str(s: &str, name_for_errors: &str) -> Result<Self, SceneError> {
+        let desc: SceneDesc = toml::from_str(s).map_err(|mut e| {
+            let line_col = e.span().map(|sp| line_col(s, sp.start));
+            let msg = one_line(e.message());
+            // Without its input, toml's Display appends "in `a.b.c`" (the key path).
+            e.set_input(None);
+            let keys = e.to_string().lines().rev().find_map(|l| {
+                l.strip_prefix("in `")?
+                    .strip_suffix('`')
+                    .map(str::to_string)
+            });
+            SceneError::Toml {
+                file: name_for_errors.to_string(),
+                line_col,
+                msg: match keys {
+                    Some(k) if !k.is_empty() => format!("{k}: {msg}"),
+                    _ => msg,
+                },
+            }
+        })?;
+        desc.validate(name_for_errors)?;
+        Ok(desc)
+    }
+
+    /// Serialises to TOML; `from_toml_str` of the result gives back `self`.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(self).expect("a SceneDesc always serialises to TOML")
+    }
+
+    /// Checks every number (see `docs/scene-format.md` for the ranges).
+    pub fn validate(&self, name_for_errors: &str) -> Result<(), SceneError> {
+        let c = Check {
+            file: name_for_errors,
+        };
+        // camera
+        let cam = &self.camera;
+        c.finite3("camera.position", cam.position)?;
+        c.finite3("camera.target", cam.target)?;
+        c.finite3("camera.up", cam.up)?;
+        c.num(
+            "camera.fov_y_deg",
+            cam.fov_y_deg,
+            cam.fov_y_deg > 0.0 && cam.fov_y_deg < 180.0,
+            "in (0, 180)",
+        )?;
+        c.positive("camera.near", cam.near)?;
+        c.num("camera.far", cam.far, cam.far > cam.near, "> camera.near")?;
+        let dir = Vec3::from(cam.target) - Vec3::from(cam.position);
+        if dir.length_squared() == 0.0 {
+            return Err(c.err("camera.target", "must differ from camera.position"));
+        }
+        let up = Vec3::from(cam.up);
+        if up.cross(dir).length_squared() <= 1e-12 * up.length_squared() * dir.length_squared() {
+            return Err(c.err(
+                "camera.up",
+                "must be non-zero and not parallel to the view direction",
+            ));
+        }
+        // render
+        self.render
+            .validate()
+            .map_err(|e| c.err(format!("render.{}", e.field), e.message))?;
+        // lights
+        for (i, l) in self.lights.iter().enumerate() {
+            let f = |k: &str| format!("lights[{i}].{k}");
+            c.finite3(&f("position"), l.position)?;
+            c.finite3(&f("target"), l.target)?;
+            c.nonneg3(&f("color"), l.color)?;
+            c.num(&f("intensity"), l.intensity, l.intensity >= 0.0, ">= 0")?;
+            c.finite(&f("inner_angle_deg"), l.inner_angle_deg)?;
+            c.finite(&f("outer_angle_deg"), l.outer_angle_deg)?;
+            if l.kind == LightKind::Spot {
+                c.num(
+                    &f("inner_angle_deg"),
+                    l.inner_angle_deg,
+                    l.inner_angle_deg > 0.0 && l.inner_angle_deg <= l.outer_angle_deg,
+                    "> 0 and <= outer_angle_deg",
+                )?;
+                c.num(
+                    &f("outer_angle_deg"),
+                    l.outer_angle_deg,
+                    l.outer_angle_deg < 90.0,
+                    "< 90",
+                )?;
+            }
+            if l.kind != LightKind::Point && l.position == l.target {
+                return Err(c.err(
+                    f("target"),
+                    "must differ from position (it gives the light direction)",
+                ));
+            }
+            let s = l.shadow_map_size;
+            if s != 0 && !(16..=8192).contains(&s) {
+                return Err(c.err(
+                    f("shadow_map_size"),
+                    format!("must be 0 (no shadow) or in 16..=8192 (got {s})"),
+                ));
+            }
+            c.num(
+                &f("shadow_bias"),
+                l.shadow_bias,
+                l.shadow_bias >= 0.0,
+                ">= 0",
+            )?;
+        }
+        // objects
+        for (i, o) in self.objects.iter().enumerate() {
+            let f = |k: &str| format!("objects[{i}].{k}");
+            match &o.mesh {
+                MeshDesc::Gltf { path } => c.path(&f("mesh.gltf"), &Some(path.clone()))?,
+                MeshDesc::Slab {
+                    width,
+                    height,
+                    thickness,
+                } => {
+                    c.positive(&f("mesh.width"), *width)?;
+                    c.positive(&f("mesh.height"), *height)?;
+                    c.positive(&f("mesh.thickness"), *thickness)?;
+                }
+                MeshDesc::Wedge {
+                    length,
+                    height,
+                    max_thickness,
+                } => {
+                    c.positive(&f("mesh.length"), *length)?;
+                    c.positive(&f("mesh.height"), *height)?;
+                    c.positive(&f("mesh.max_thickness"), *max_thickness)?;
+                }
+                MeshDesc::Sphere { radius, segments } => {
+                    c.positive(&f("mesh.radius"), *radius)?;
+                    if !(3..=1024).contains(segments) {
+                        return Err(c.err(
+                            f("mesh.segments"),
+                            format!("must be in 3..=1024 (got {segments})"),
+                        ));
+                    }
+                }
+            }
+            c.positive(&f("mm_per_unit"), o.mm_per_unit)?;
+            c.finite3(&f("translation"), o.translation)?;
+            c.finite3(&f("rotation_deg"), o.rotation_deg)?;
+            c.positive(&f("scale"), o.scale)?;
+            let m = &o.material;
+            let f = |k: &str| format!("objects[{i}].material.{k}");
+            c.nonneg3(&f("albedo"), m.albedo)?;
+            c.path(&f("albedo_texture"), &m.albedo_texture)?;
+            c.path(&f("normal_texture"), &m.normal_texture)?;
+            c.path(&f("specular_texture"), &m.specular_texture)?;
+            c.num(
+                &f("roughness"),
+                m.roughness,
+                m.roughness > 0.0 && m.roughness <= 1.0,
+                "in (0, 1]",
+            )?;
+            c.num(&f("specular"), m.specular, m.specular >= 0.0, ">= 0")?;
+            c.num(
+                &f("sss_strength"),
+                m.sss_strength,
+                (0.0..=1.0).contains(&m.sss_strength),
+                "in [0, 1]",
+            )?;
+            c.positive(&f("sss_width"), m.sss_width)?;
+            c.num(
+                &f("translucency"),
+                m.translucency,
+                m.translucency >= 0.0,
+                ">= 0",
+            )?;
+            if m.profile.trim().is_empty() {
+                return Err(c.err(f("profile"), "must not be empty"));
+            }
+            if let Some(k) = m.kernel_strength {
+                c.unit3(&f("kernel_strength"), k)?;
+            }
+            if let Some(k) = m.falloff {
+                c.unit3(&f("falloff"), k)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------- loaded scene

@@ -1,0 +1,120 @@
+//! What a frame is rendered with, one GPU-free type per effect. The scene file's `[render]`
+//! table is a [`RenderSettings`]; the command line overlays its flags on it and the viewer's
+//! two sides are clones of it, so every setting has one name, one unit and one default.
+
+mod sss;
+mod transmittance;
+
+pub use sss::{SssMethod, SssSettings};
+pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
+
+use serde::{Deserialize, Serialize};
+
+/// A setting out of range. `field` is its path below `[render]` as written in a scene file
+/// (`width`, `sss.samples`, `transmittance.normal_shrink`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct InvalidSetting {
+    pub field: String,
+    pub message: String,
+}
+
+impl InvalidSetting {
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same error for a setting nested under `prefix` (`sss` + `samples` = `sss.samples`).
+    pub fn under(self, prefix: &str) -> Self {
+        Self {
+            field: format!("{prefix}.{}", self.field),
+            message: self.message,
+        }
+    }
+}
+
+/// `x` finite and satisfying `ok`; `rule` reads like "> 0".
+pub(crate) fn check(field: &str, x: f32, ok: bool, rule: &str) -> Result<(), InvalidSetting> {
+    if x.is_finite() && ok {
+        Ok(())
+    } else if rule.is_empty() {
+        Err(InvalidSetting::new(
+            field,
+            format!("must be finite (got {x})"),
+        ))
+    } else {
+        Err(InvalidSetting::new(
+            field,
+            format!("must be finite and {rule} (got {x})"),
+        ))
+    }
+}
+
+/// Largest image side accepted before the device's own limit is known.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Exposure beyond this many stops saturates or blackens every pixel of a half-float target.
+pub const MAX_EXPOSURE_EV: f32 = 32.0;
+
+/// The `[render]` table: output size, exposure, ambient light and the settings of each effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Exposure in stops: radiance is multiplied by 2^ev before tone mapping.
+    pub exposure_ev: f32,
+    /// Uniform ambient radiance (linear RGB).
+    pub ambient: [f32; 3],
+    /// Background colour (linear RGB).
+    pub background: [f32; 3],
+    /// Subsurface scattering of the reflected light (`[render.sss]`).
+    pub sss: SssSettings,
+    /// Light through thin parts (`[render.transmittance]`).
+    pub transmittance: TransmittanceSettings,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            exposure_ev: 0.0,
+            ambient: [0.02, 0.02, 0.02],
+            background: [0.02, 0.02, 0.025],
+            sss: SssSettings::default(),
+            transmittance: TransmittanceSettings::default(),
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Checks every value; the error names the field below `[render]`.
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        for (field, v) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_IMAGE_SIDE).contains(&v) {
+                return Err(InvalidSetting::new(
+                    field,
+                    format!("must be in 1..={MAX_IMAGE_SIDE} (got {v})"),
+                ));
+            }
+        }
+        check(
+            "exposure_ev",
+            self.exposure_ev,
+            self.exposure_ev.abs() <= MAX_EXPOSURE_EV,
+            &format!("within +-{MAX_EXPOSURE_EV}"),
+        )?;
+        for (field, v) in [("ambient", self.ambient), ("background", self.background)] {
+            for (i, x) in v.into_iter().enumerate() {
+                check(&format!("{field}[{i}]"), x, x >= 0.0, ">= 0")?;
+            }
+        }
+        self.sss.validate().map_err(|e| e.under("sss"))?;
+        self.transmittance
+            .validate()
+            .map_err(|e| e.under("transmittance"))
+    }
+}

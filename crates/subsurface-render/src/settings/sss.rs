@@ -1,0 +1,155 @@
+//! Settings of subsurface scattering that hold for the whole frame. What differs per material
+//! (profile, strength, width, kernel strength and falloff) is in the material.
+
+use serde::{Deserialize, Serialize};
+use subsurface_profile::DEFAULT_SAMPLES;
+
+use super::{InvalidSetting, check};
+
+/// Which subsurface-scattering method runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SssMethod {
+    /// No scattering: the diffuse radiance is left as it is.
+    None,
+    /// Jimenez et al. 2009 / GPU Pro 2010: the profile's Gaussians, a 7-tap H and V blur
+    /// each, accumulated by blending.
+    Gaussian6,
+    /// Jimenez et al. 2015: one horizontal and one vertical pass of an N-tap kernel.
+    #[default]
+    Separable,
+    /// Hable et al. 2009: one 2-D pass with 13 jittered taps.
+    Hable13,
+    /// d'Eon et al. 2007: the sum of Gaussians in texture space (per-object UV maps).
+    Texture,
+}
+
+impl SssMethod {
+    pub const ALL: [SssMethod; 5] = [
+        SssMethod::None,
+        SssMethod::Gaussian6,
+        SssMethod::Separable,
+        SssMethod::Hable13,
+        SssMethod::Texture,
+    ];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SssMethod::None => "none",
+            SssMethod::Gaussian6 => "gaussian6",
+            SssMethod::Separable => "separable",
+            SssMethod::Hable13 => "hable13",
+            SssMethod::Texture => "texture",
+        }
+    }
+
+    /// True for the methods that blur the screen-space image.
+    pub fn is_screen_space(self) -> bool {
+        matches!(
+            self,
+            SssMethod::Gaussian6 | SssMethod::Separable | SssMethod::Hable13
+        )
+    }
+}
+
+/// Largest separable kernel.
+pub const MAX_SAMPLES: u32 = 63;
+
+/// The `[render.sss]` table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SssSettings {
+    pub method: SssMethod,
+    /// Separable: number of kernel taps (odd, 3..=63).
+    pub samples: u32,
+    /// Screen space: weaken taps by their depth difference, so the blur follows the surface
+    /// instead of crossing silhouettes and depth edges (Jimenez et al. 2009).
+    pub follow_surface: bool,
+    /// Screen space: depth difference, in millimetres on the skin, that fully stops a tap.
+    pub edge_mm: f32,
+    /// Six Gaussians: a Gaussian narrower than this many pixels is skipped (GPU Pro).
+    pub min_sigma_px: f32,
+    /// Six Gaussians: which of the five blurred Gaussians (the narrowest is never blurred)
+    /// are accumulated; switching one off shows its share of the profile.
+    pub gaussians: [bool; 5],
+    /// Texture space: size of each object's UV-space maps in texels per side.
+    pub texture_size: u32,
+    /// Texture space: padding of the UV islands in texels (0..=16).
+    pub texture_padding: u32,
+    /// Texture space: exponent of the albedo applied before the blur, the rest after it:
+    /// 0 = post-scatter, 0.5 = pre- and post-scatter (d'Eon), 1 = pre-scatter.
+    pub texture_albedo_pre: f32,
+}
+
+impl Default for SssSettings {
+    fn default() -> Self {
+        Self {
+            method: SssMethod::Separable,
+            samples: DEFAULT_SAMPLES,
+            follow_surface: true,
+            edge_mm: 3.0,
+            min_sigma_px: 0.25,
+            gaussians: [true; 5],
+            texture_size: 1024,
+            texture_padding: 4,
+            texture_albedo_pre: 0.5,
+        }
+    }
+}
+
+impl SssSettings {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        let n = self.samples;
+        if !(3..=MAX_SAMPLES).contains(&n) || n.is_multiple_of(2) {
+            return Err(InvalidSetting::new(
+                "samples",
+                format!("must be odd and in 3..={MAX_SAMPLES} (got {n})"),
+            ));
+        }
+        check("edge_mm", self.edge_mm, self.edge_mm > 0.0, "> 0")?;
+        check(
+            "min_sigma_px",
+            self.min_sigma_px,
+            self.min_sigma_px >= 0.0,
+            ">= 0",
+        )?;
+        if !(16..=16384).contains(&self.texture_size) {
+            return Err(InvalidSetting::new(
+                "texture_size",
+                format!("must be in 16..=16384 (got {})", self.texture_size),
+            ));
+        }
+        if self.texture_padding > 16 {
+            return Err(InvalidSetting::new(
+                "texture_padding",
+                format!("must be in 0..=16 (got {})", self.texture_padding),
+            ));
+        }
+        check(
+            "texture_albedo_pre",
+            self.texture_albedo_pre,
+            (0.0..=1.0).contains(&self.texture_albedo_pre),
+            "in [0, 1]",
+        )
+    }
+}
+
+impl std::str::FromStr for SssMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        SssMethod::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = SssMethod::ALL.iter().map(|m| m.name()).collect();
+                format!("{s:?} is not one of {}", names.join(", "))
+            })
+    }
+}
+
+impl std::fmt::Display for SssMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

@@ -1,0 +1,126 @@
+//! Settings of light through thin parts (Jimenez et al. 2010 and its alternatives).
+
+use serde::{Deserialize, Serialize};
+
+use super::{InvalidSetting, check};
+
+/// How light through thin parts is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TransmittanceMethod {
+    /// None.
+    Off,
+    /// Jimenez et al. 2010: T(s) of the sum-of-Gaussians profile (colour turns from yellow to
+    /// red with thickness).
+    #[default]
+    Paper,
+    /// Green 2004: Beer-Lambert exp(-sigma_t s) with the material's extinction.
+    Beer,
+    /// The ad-hoc s^-0.6 falloff of the screen/texture-space report (001_*), grey.
+    SeedReport,
+    /// Translucent shadow maps (d'Eon et al. 2007): the shadow maps also store the (u, v) of
+    /// the surface nearest the light, whose irradiance, blurred in texture space, is
+    /// attenuated by the same T(s) as `Paper`.
+    Tsm,
+    /// Diffusion theory (our extension, see `docs/fidelity.md`): T(s) is the light a slab of
+    /// the material's measured coefficients transmits (Donner and Jensen 2005's multipole),
+    /// relative to what it reflects; it decays exponentially rather than like a Gaussian, so
+    /// fingers and thick ears still glow red. The Gaussian skin preset uses skin1's
+    /// coefficients.
+    Diffusion,
+}
+
+impl TransmittanceMethod {
+    pub const ALL: [TransmittanceMethod; 6] = [
+        TransmittanceMethod::Off,
+        TransmittanceMethod::Paper,
+        TransmittanceMethod::Beer,
+        TransmittanceMethod::SeedReport,
+        TransmittanceMethod::Tsm,
+        TransmittanceMethod::Diffusion,
+    ];
+
+    /// The number transmittance.wgsl switches on.
+    pub fn code(self) -> f32 {
+        match self {
+            TransmittanceMethod::Off => 0.0,
+            TransmittanceMethod::Paper => 1.0,
+            TransmittanceMethod::Beer => 2.0,
+            TransmittanceMethod::SeedReport => 3.0,
+            TransmittanceMethod::Tsm => 4.0,
+            TransmittanceMethod::Diffusion => 5.0,
+        }
+    }
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TransmittanceMethod::Off => "off",
+            TransmittanceMethod::Paper => "paper",
+            TransmittanceMethod::Beer => "beer",
+            TransmittanceMethod::SeedReport => "seed-report",
+            TransmittanceMethod::Tsm => "tsm",
+            TransmittanceMethod::Diffusion => "diffusion",
+        }
+    }
+}
+
+/// The `[render.transmittance]` table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TransmittanceSettings {
+    pub method: TransmittanceMethod,
+    /// How far (scene units) a shaded point moves inward along its vertex normal before the
+    /// shadow-map lookup (000_* uses 0.005), so it does not find itself in the map.
+    pub normal_shrink: f32,
+    /// Width in texels (odd, 1..=15) of the shadow-map square averaged for thickness.
+    pub thickness_filter: u32,
+}
+
+impl Default for TransmittanceSettings {
+    fn default() -> Self {
+        Self {
+            method: TransmittanceMethod::Paper,
+            normal_shrink: 0.005,
+            thickness_filter: 3,
+        }
+    }
+}
+
+impl TransmittanceSettings {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        check(
+            "normal_shrink",
+            self.normal_shrink,
+            self.normal_shrink >= 0.0,
+            ">= 0",
+        )?;
+        let f = self.thickness_filter;
+        if !(1..=15).contains(&f) || f.is_multiple_of(2) {
+            return Err(InvalidSetting::new(
+                "thickness_filter",
+                format!("must be odd and in 1..=15 (got {f})"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl std::str::FromStr for TransmittanceMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        TransmittanceMethod::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = TransmittanceMethod::ALL.iter().map(|m| m.name()).collect();
+                format!("{s:?} is not one of {}", names.join(", "))
+            })
+    }
+}
+
+impl std::fmt::Display for TransmittanceMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
