@@ -49,26 +49,39 @@ mod shader_tests {
         }
     }
 
-    /// Every .wgsl file beside the passes is part of some compiled shader, so none escapes
-    /// the validation above.
+    /// Every .wgsl file beside the passes (in their subfolders too) is part of some compiled
+    /// shader, so none escapes the validation above.
     #[test]
     fn every_wgsl_file_is_validated() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/passes");
-        let mut count = 0;
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.extension().is_some_and(|e| e == "wgsl") {
-                let text = std::fs::read_to_string(&path).unwrap();
-                assert!(
-                    crate::passes::ALL_SHADERS
-                        .iter()
-                        .any(|(_, s)| s.contains(text.trim())),
-                    "{} is not in passes::ALL_SHADERS",
-                    path.display()
-                );
-                count += 1;
+        fn wgsl_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+            for entry in std::fs::read_dir(dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    wgsl_files(&path, out);
+                } else if path.extension().is_some_and(|e| e == "wgsl") {
+                    out.push(path);
+                }
             }
         }
-        assert!(count >= 4, "expected at least 4 WGSL files, found {count}");
+        let mut files = Vec::new();
+        wgsl_files(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/passes"),
+            &mut files,
+        );
+        for path in &files {
+            let text = std::fs::read_to_string(path).unwrap();
+            assert!(
+                crate::passes::ALL_SHADERS
+                    .iter()
+                    .any(|(_, s)| s.contains(text.trim())),
+                "{} is not in passes::ALL_SHADERS",
+                path.display()
+            );
+        }
+        assert!(
+            files.len() >= 10,
+            "expected at least 10 WGSL files, found {}",
+            files.len()
+        );
     }
 }

@@ -371,6 +371,12 @@ pub struct MaterialDesc {
     /// the glTF base colour texture when `albedo_texture` is not given.
     #[serde(default = "d_true", skip_serializing_if = "is_true")]
     pub use_gltf_color: bool,
+    /// Flip every texture of the material vertically (v -> 1 - v) when it is loaded: for
+    /// maps authored for bottom-up sampling (OpenGL/three.js `flipY`), such as the separate
+    /// colour, normal and specular maps of the Lee Perry-Smith head. The normal map needs no
+    /// other change: its green channel still follows +v of the mesh's UVs.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub texture_flip_v: bool,
     /// Beckmann roughness m, in (0, 1].
     pub roughness: f32,
     /// Kelemen/Szirmay-Kalos specular intensity rho_s, >= 0.
@@ -402,6 +408,7 @@ impl Default for MaterialDesc {
             normal_texture: None,
             specular_texture: None,
             use_gltf_color: true,
+            texture_flip_v: false,
             roughness: 0.3,
             specular: 0.18,
             sss_strength: 1.0,

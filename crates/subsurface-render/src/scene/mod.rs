@@ -142,7 +142,19 @@ fn load_object(
     if let Some(t) = tex("material.normal_texture", &m.normal_texture)? {
         normal_texture = Some(t);
     }
-    let specular_texture = tex("material.specular_texture", &m.specular_texture)?;
+    let mut specular_texture = tex("material.specular_texture", &m.specular_texture)?;
+    if m.texture_flip_v {
+        for t in [
+            &mut albedo_texture,
+            &mut normal_texture,
+            &mut specular_texture,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            image::imageops::flip_vertical_in_place(t);
+        }
+    }
     Ok(Object {
         name: if o.name.is_empty() {
             format!("object{index}")
