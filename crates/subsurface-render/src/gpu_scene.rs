@@ -84,30 +84,18 @@ pub fn object_uniform(
     ObjectUniform {
         model: mat(object.transform),
         normal_matrix: mat(object.transform.inverse().transpose()),
-        albedo: [
-            object.albedo[0],
-            object.albedo[1],
-            object.albedo[2],
-            m.roughness,
-        ],
-        params: [
-            m.specular,
-            m.sss_strength,
-            world_per_mm(object),
-            m.translucency,
-        ],
-        flags: [
-            object.albedo_texture.is_some() as u32 as f32,
-            object.normal_texture.is_some() as u32 as f32,
-            object.specular_texture.is_some() as u32 as f32,
-            profile_row as f32,
-        ],
-        transmit: [
-            optics.sigma_t[0],
-            optics.sigma_t[1],
-            optics.sigma_t[2],
-            lut_range_mm,
-        ],
+        albedo: object.albedo,
+        roughness: m.roughness,
+        specular: m.specular,
+        sss_strength: m.sss_strength,
+        world_per_mm: world_per_mm(object),
+        translucency: m.translucency,
+        has_albedo_map: object.albedo_texture.is_some() as u32,
+        has_normal_map: object.normal_texture.is_some() as u32,
+        has_specular_map: object.specular_texture.is_some() as u32,
+        profile: profile_row,
+        extinction: optics.sigma_t,
+        lut_range_mm,
     }
 }
 
@@ -311,9 +299,12 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
     let focal_px = 0.5 * height as f32 / (0.5 * fov).tan();
     CameraUniform {
         view_proj: mat(proj * view),
-        position: v4(position, 1.0),
-        forward: v4((target - position).normalize(), 0.0),
-        params: [c.near, c.far, focal_px, 0.0],
+        position: position.to_array(),
+        near: c.near,
+        forward: (target - position).normalize().to_array(),
+        far: c.far,
+        focal_px,
+        _pad: [0.0; 3],
     }
 }
 
@@ -364,15 +355,11 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
         .unwrap_or(0)
         .max(1);
     let mut uniform = LightsUniform::zeroed_default();
-    uniform.count = [scene.desc.lights.len() as u32, 0, 0, 0];
-    let a = settings.ambient;
-    uniform.ambient = [a[0], a[1], a[2], 0.0];
-    uniform.transmittance = [
-        transmittance.method.code(),
-        transmittance.normal_shrink,
-        transmittance.thickness_filter as f32,
-        0.0,
-    ];
+    uniform.count = scene.desc.lights.len() as u32;
+    uniform.ambient = settings.ambient;
+    uniform.transmittance = transmittance.method.code();
+    uniform.normal_shrink = transmittance.normal_shrink;
+    uniform.thickness_filter = transmittance.thickness_filter;
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {
         let (u, light_layers) = light_uniform(i, l, centre, radius, atlas_size, layers.len());

@@ -145,12 +145,8 @@ fn shadow_signature(lights: &gpu_scene::LightSetup) -> Vec<(usize, u32)> {
     v
 }
 
-fn thickness_flag(view: DebugView) -> f32 {
-    if view == DebugView::Thickness {
-        1.0
-    } else {
-        0.0
-    }
+fn thickness_flag(view: DebugView) -> u32 {
+    (view == DebugView::Thickness) as u32
 }
 
 fn output_texture(ctx: &GpuContext, w: u32, h: u32) -> wgpu::Texture {
@@ -212,7 +208,7 @@ impl Renderer {
         let profiles = profile_table(scene, &options)?;
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
-        lights.uniform.transmittance[3] = thickness_flag(options.view);
+        lights.uniform.thickness_view = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
@@ -249,7 +245,7 @@ impl Renderer {
                 sss: &views[3],
             },
         );
-        sss.prepare(&ctx.queue, camera.params[2]);
+        sss.prepare(&ctx.queue, camera.focal_px);
         let output = output_texture(ctx, options.width(), options.height());
         let profiler = timing::new_profiler(device)?;
         let copy = options
@@ -332,7 +328,7 @@ impl Renderer {
             }
         }
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
-        lights.uniform.transmittance[3] = thickness_flag(options.view);
+        lights.uniform.thickness_view = thickness_flag(options.view);
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
         let settings = texture_settings(options);
@@ -416,7 +412,7 @@ impl Renderer {
                 },
             );
         }
-        self.sss.prepare(&queue, camera.params[2]);
+        self.sss.prepare(&queue, camera.focal_px);
         if resized || options.baseline_copy != self.copy.is_some() {
             self.copy = options
                 .baseline_copy

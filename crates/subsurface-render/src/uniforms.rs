@@ -9,10 +9,14 @@ pub const MAX_LIGHTS: usize = 8;
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct CameraUniform {
     pub view_proj: [[f32; 4]; 4],
-    pub position: [f32; 4],
-    pub forward: [f32; 4],
-    /// near, far, focal length in pixels, unused
-    pub params: [f32; 4],
+    pub position: [f32; 3],
+    pub near: f32,
+    /// Unit view direction: linear depth is measured along it.
+    pub forward: [f32; 3],
+    pub far: f32,
+    /// 0.5 * height / tan(fov_y / 2).
+    pub focal_px: f32,
+    pub _pad: [f32; 3],
 }
 
 #[repr(C)]
@@ -28,11 +32,16 @@ pub struct LightUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct LightsUniform {
-    pub count: [u32; 4],
-    pub ambient: [f32; 4],
-    /// method (0 off, 1 paper, 2 Beer, 3 seed report, 4 TSM, 5 diffusion), normal shrink, thickness filter,
-    /// 1 = write the thickness instead of diffuse (`DebugView::Thickness`)
-    pub transmittance: [f32; 4],
+    pub count: u32,
+    /// `TransmittanceMethod::code`.
+    pub transmittance: u32,
+    /// Texels per axis averaged for thickness.
+    pub thickness_filter: u32,
+    /// 1 = write the thickness instead of diffuse (`DebugView::Thickness`).
+    pub thickness_view: u32,
+    pub ambient: [f32; 3],
+    /// Scene units the shaded point moves inward before the shadow-map lookup.
+    pub normal_shrink: f32,
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -41,14 +50,25 @@ pub struct LightsUniform {
 pub struct ObjectUniform {
     pub model: [[f32; 4]; 4],
     pub normal_matrix: [[f32; 4]; 4],
-    /// rgb linear albedo, a = Beckmann roughness m
-    pub albedo: [f32; 4],
-    /// rho_s, SSS strength, scene units per profile mm, translucency
-    pub params: [f32; 4],
-    /// has albedo map, has normal map, has specular map
-    pub flags: [f32; 4],
-    /// Beer-Lambert extinction per mm (rgb), T(s) LUT range in mm
-    pub transmit: [f32; 4],
+    /// Linear albedo.
+    pub albedo: [f32; 3],
+    /// Beckmann roughness m.
+    pub roughness: f32,
+    /// Kelemen/Szirmay-Kalos rho_s.
+    pub specular: f32,
+    pub sss_strength: f32,
+    /// Scene units per profile millimetre.
+    pub world_per_mm: f32,
+    pub translucency: f32,
+    pub has_albedo_map: u32,
+    pub has_normal_map: u32,
+    pub has_specular_map: u32,
+    /// Row of the screen-space SSS profile table.
+    pub profile: u32,
+    /// Beer-Lambert extinction per mm.
+    pub extinction: [f32; 3],
+    /// Thickness range of the T(s) LUT in mm.
+    pub lut_range_mm: f32,
 }
 
 #[repr(C)]

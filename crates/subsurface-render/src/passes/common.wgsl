@@ -7,9 +7,14 @@ const KIND_DIRECTIONAL: f32 = 2.0;
 
 struct Camera {
     view_proj: mat4x4<f32>,
-    position: vec4<f32>,   // xyz, w unused
-    forward: vec4<f32>,    // xyz unit view direction; linear depth is measured along it
-    params: vec4<f32>,     // near, far, focal length in pixels, unused
+    position: vec3<f32>,
+    near: f32,
+    forward: vec3<f32>,    // unit view direction; linear depth is measured along it
+    far: f32,
+    focal_px: f32,         // 0.5 * height / tan(fov_y / 2)
+    _pad0: f32,
+    _pad1: f32,
+    _pad2: f32,
 };
 
 struct Light {
@@ -21,21 +26,31 @@ struct Light {
 };
 
 struct Lights {
-    count: vec4<u32>,      // x = number of lights
-    ambient: vec4<f32>,
-    // x = method (0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*, 4 TSM),
-    // y = normal shrink (scene units), z = thickness filter width (texels per axis)
-    transmittance: vec4<f32>,
+    count: u32,
+    // 0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*, 4 TSM, 5 diffusion
+    transmittance: u32,
+    thickness_filter: u32, // texels per axis averaged for thickness
+    thickness_view: u32,   // 1: write the thickness instead of diffuse (debug view)
+    ambient: vec3<f32>,
+    normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
     lights: array<Light, MAX_LIGHTS>,
 };
 
 struct Object {
     model: mat4x4<f32>,
     normal_matrix: mat4x4<f32>,
-    albedo: vec4<f32>,     // rgb linear, a = roughness (Beckmann m)
-    params: vec4<f32>,     // rho_s, sss strength, scene units per profile mm, translucency
-    flags: vec4<f32>,      // has albedo map, has normal map, has specular map, SSS profile index
-    transmit: vec4<f32>,   // rgb = Beer-Lambert extinction (1/mm), a = T(s) LUT range in mm
+    albedo: vec3<f32>,     // linear
+    roughness: f32,        // Beckmann m
+    specular: f32,         // Kelemen/Szirmay-Kalos rho_s
+    sss_strength: f32,     // 0 = not skin
+    world_per_mm: f32,     // scene units per profile millimetre
+    translucency: f32,     // thickness scale of transmittance
+    has_albedo_map: u32,
+    has_normal_map: u32,
+    has_specular_map: u32,
+    profile: u32,          // row of the screen-space SSS profile table
+    extinction: vec3<f32>, // Beer-Lambert sigma_t, 1/mm
+    lut_range_mm: f32,     // thickness range of the T(s) LUT
 };
 
 @group(1) @binding(0) var<uniform> object: Object;
@@ -71,4 +86,18 @@ fn light_direction(light_pos: vec4<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> 
         return -light_dir;
     }
     return normalize(light_pos.xyz - p);
+}
+
+// Object space to world: every pass that draws meshes places them the same way.
+fn world_position(v: VertexIn) -> vec4<f32> {
+    return object.model * vec4<f32>(v.position, 1.0);
+}
+
+// The shading frame in world space (normal and tangent; w keeps the bitangent sign).
+fn world_normal(v: VertexIn) -> vec3<f32> {
+    return (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
+}
+
+fn world_tangent(v: VertexIn) -> vec4<f32> {
+    return vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
 }

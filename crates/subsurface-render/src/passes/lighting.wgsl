@@ -2,7 +2,7 @@
 //   0: diffuse radiance (irradiance x albedo), the part that is blurred
 //   1: specular radiance, added after the blur and never blurred
 //   2: linear view depth in scene units (the blur width is divided by it)
-//   3: SSS strength (0 = not skin) and scene units per profile millimetre
+//   3: SSS strength (0 = not skin), scene units per profile millimetre, profile row
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> lights: Lights;
@@ -19,11 +19,11 @@ struct LitVarying {
 @vertex
 fn vs_main(v: VertexIn) -> LitVarying {
     var out: LitVarying;
-    let world = object.model * vec4<f32>(v.position, 1.0);
+    let world = world_position(v);
     out.world = world.xyz;
     out.clip = camera.view_proj * world;
-    out.normal = (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
-    out.tangent = vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
+    out.normal = world_normal(v);
+    out.tangent = world_tangent(v);
     out.uv = v.uv;
     return out;
 }
@@ -153,7 +153,7 @@ struct TextureSpace {
 // normal map.
 fn shading_normal(in: LitVarying, n_vertex: vec3<f32>) -> vec3<f32> {
     var n = n_vertex;
-    if (object.flags.y > 0.5) {
+    if (object.has_normal_map != 0u) {
         let t = normalize(in.tangent.xyz - n_vertex * dot(n_vertex, in.tangent.xyz));
         let b = cross(n_vertex, t) * select(-1.0, 1.0, in.tangent.w >= 0.0);
         let tn = textureSample(normal_map, material_sampler, in.uv).xyz * 2.0 - vec3<f32>(1.0);
@@ -177,7 +177,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     s.transmitted = vec3<f32>(0.0);
     s.tsm = vec3<f32>(0.0);
     s.specular = vec3<f32>(0.0);
-    let count = min(lights.count.x, MAX_LIGHTS);
+    let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.position, light.direction.xyz, world);
@@ -223,16 +223,16 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         n_vertex = -n_vertex;
     }
     let n = shading_normal(in, n_vertex);
-    var albedo = object.albedo.rgb;
-    if (object.flags.x > 0.5) {
+    var albedo = object.albedo;
+    if (object.has_albedo_map != 0u) {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
     }
-    var rho_s = object.params.x;
-    if (object.flags.z > 0.5) {
+    var rho_s = object.specular;
+    if (object.has_specular_map != 0u) {
         rho_s *= textureSample(specular_map, material_sampler, in.uv).r;
     }
-    let m = object.albedo.a;
-    let v = normalize(camera.position.xyz - in.world);
+    let m = object.roughness;
+    let v = normalize(camera.position - in.world);
     let ts = texture_space.params;
     let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5);
 
@@ -245,14 +245,14 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     } else {
         // Transmitted light joins the reflected diffuse light before the SSS blur, so the two
         // are blurred together (000_*).
-        out.diffuse = vec4<f32>(albedo * (s.irradiance + lights.ambient.rgb + s.transmitted + s.tsm), 1.0);
+        out.diffuse = vec4<f32>(albedo * (s.irradiance + lights.ambient + s.transmitted + s.tsm), 1.0);
     }
-    if (lights.transmittance.w > 0.5) {
+    if (lights.thickness_view != 0u) {
         // Thickness debug view (tonemap.wgsl reads it back from diffuse.r).
         out.diffuse = vec4<f32>(min_thickness_mm(in.world, n_vertex), 0.0, 0.0, 1.0);
     }
     out.specular = vec4<f32>(s.specular, 1.0);
-    out.depth = dot(in.world - camera.position.xyz, camera.forward.xyz);
-    out.sss = vec4<f32>(object.params.y, object.params.z, object.flags.w, 0.0);
+    out.depth = dot(in.world - camera.position, camera.forward);
+    out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), 0.0);
     return out;
 }

@@ -17,7 +17,7 @@ struct ShadowOut {
 @vertex
 fn vs_main(v: VertexIn) -> ShadowOut {
     var out: ShadowOut;
-    let world = object.model * vec4<f32>(v.position, 1.0);
+    let world = world_position(v);
     out.world = world.xyz;
     out.clip = shadow_view.view_proj * world;
     return out;

@@ -40,7 +40,7 @@ fn lut_row(s_mm: f32, range: f32, v: f32) -> vec3<f32> {
 
 // T(s) of the object's sum-of-Gaussians profile (000_*).
 fn profile_transmittance(s_mm: f32) -> vec3<f32> {
-    return lut_row(s_mm, object.transmit.a, 0.25);
+    return lut_row(s_mm, object.lut_range_mm, 0.25);
 }
 
 // T(s) from diffusion theory for the object's measured coefficients (lut.rs, `diffusion`).
@@ -55,24 +55,24 @@ fn diffusion_transmittance(s_mm: f32) -> vec3<f32> {
 // object's profile; < 0 where it is unknown (no shadow map, outside it, not translucent).
 fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     // Only lights with a shadow map know the thickness: the others add nothing (no glow).
-    if (light.direction.w < 0.0 || object.params.w <= 0.0) {
+    if (light.direction.w < 0.0 || object.translucency <= 0.0) {
         return -1.0;
     }
     // Shrink along the vertex normal so points at the silhouette project inside the object
     // in the shadow map rather than onto background texels (000_*, instead of Green's growing
     // of the shadow caster).
-    let shrunk = p - n_vertex * lights.transmittance.y;
+    let shrunk = p - n_vertex * lights.normal_shrink;
     let sc = shadow_coord(light, shrunk);
     if (!sc.inside) {
         return -1.0;
     }
-    let d_in = shadow_distance(light, sc, i32(lights.transmittance.z));
+    let d_in = shadow_distance(light, sc, i32(lights.thickness_filter));
     if (d_in < 0.0) {
         return -1.0;
     }
     let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
-    return s_units / (object.params.z * object.params.w);
+    return s_units / (object.world_per_mm * object.translucency);
 }
 
 // The back-irradiance factor of `transmittance`: the 0.3 lets light wrap around thin edges
@@ -86,7 +86,7 @@ fn back_irradiance(n_vertex: vec3<f32>, l: vec3<f32>) -> f32 {
 // they see the point itself (thickness 0) and transmit nothing through it.
 fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     var best = -1.0;
-    let count = min(lights.count.x, MAX_LIGHTS);
+    let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.position, light.direction.xyz, p);
@@ -102,7 +102,7 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
 }
 
 fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    let method = u32(lights.transmittance.x);
+    let method = lights.transmittance;
     // 4 (translucent shadow maps) has its own path, tsm_transmittance.
     if (method == 0u || method == 4u || method > 5u) {
         return vec3<f32>(0.0);
@@ -119,7 +119,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
         case 2u: {
             // Green's Beer-Lambert attenuation exp(-sigma_t s): one layer, no colour shift
             // with depth beyond what sigma_t gives.
-            t = exp(-object.transmit.rgb * s_mm);
+            t = exp(-object.extinction * s_mm);
         }
         case 3u: {
             // The ad-hoc falloff of 001_*, proportional to s^-0.6 (its constants are not
@@ -143,20 +143,20 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
 // the shaded point: a point the light sees is its own entry point, so it gets (1 - lit), and
 // the term fades in between 0.25 and 1 mm of thickness for the same reason.
 fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) -> vec3<f32> {
-    if (light.direction.w < 0.0 || object.params.w <= 0.0 || lit >= 1.0) {
+    if (light.direction.w < 0.0 || object.translucency <= 0.0 || lit >= 1.0) {
         return vec3<f32>(0.0);
     }
-    let shrunk = p - n_vertex * lights.transmittance.y;
+    let shrunk = p - n_vertex * lights.normal_shrink;
     let sc = shadow_coord(light, shrunk);
     if (!sc.inside) {
         return vec3<f32>(0.0);
     }
-    let d_in = shadow_distance(light, sc, i32(lights.transmittance.z));
+    let d_in = shadow_distance(light, sc, i32(lights.thickness_filter));
     if (d_in < 0.0) {
         return vec3<f32>(0.0);
     }
     let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
-    let s_mm = s_units / (object.params.z * object.params.w);
+    let s_mm = s_units / (object.world_per_mm * object.translucency);
     let size = light.spot.z / light.spot.w;
     let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
     let uv_in = textureLoad(tsm_atlas, texel, sc.layer, 0).xy;

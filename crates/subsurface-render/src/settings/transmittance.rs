@@ -41,14 +41,14 @@ impl TransmittanceMethod {
     ];
 
     /// The number transmittance.wgsl switches on.
-    pub fn code(self) -> f32 {
+    pub fn code(self) -> u32 {
         match self {
-            TransmittanceMethod::Off => 0.0,
-            TransmittanceMethod::Paper => 1.0,
-            TransmittanceMethod::Beer => 2.0,
-            TransmittanceMethod::SeedReport => 3.0,
-            TransmittanceMethod::Tsm => 4.0,
-            TransmittanceMethod::Diffusion => 5.0,
+            TransmittanceMethod::Off => 0,
+            TransmittanceMethod::Paper => 1,
+            TransmittanceMethod::Beer => 2,
+            TransmittanceMethod::SeedReport => 3,
+            TransmittanceMethod::Tsm => 4,
+            TransmittanceMethod::Diffusion => 5,
         }
     }
 

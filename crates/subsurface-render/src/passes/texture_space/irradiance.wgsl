@@ -7,11 +7,10 @@
 @vertex
 fn vs_irradiance(v: VertexIn) -> LitVarying {
     var out: LitVarying;
-    let world = object.model * vec4<f32>(v.position, 1.0);
-    out.world = world.xyz;
+    out.world = world_position(v).xyz;
     out.clip = vec4<f32>(v.uv.x * 2.0 - 1.0, 1.0 - v.uv.y * 2.0, 0.0, 1.0);
-    out.normal = (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
-    out.tangent = vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
+    out.normal = world_normal(v);
+    out.tangent = world_tangent(v);
     out.uv = v.uv;
     return out;
 }
@@ -28,19 +27,19 @@ fn fs_irradiance(in: LitVarying) -> IrradianceOut {
     // Screen derivatives here are derivatives per texel of the map: the surface's size of one
     // texel along u and along v, in profile millimetres (scene units per mm include the
     // material's sss_width; the SSS strength widens the profile as in screen space).
-    let mm = object.params.z * max(object.params.y, 1e-6);
+    let mm = object.world_per_mm * max(object.sss_strength, 1e-6);
     let stretch = vec2<f32>(length(dpdx(in.world)), length(dpdy(in.world))) / mm;
     // No front or back here: the normal is the mesh's own.
     let n_vertex = normalize(in.normal);
     let n = shading_normal(in, n_vertex);
-    var albedo = object.albedo.rgb;
-    if (object.flags.x > 0.5) {
+    var albedo = object.albedo;
+    if (object.has_albedo_map != 0u) {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
     }
     let s = shade(in.world, n, n_vertex, n_vertex, 1.0, 0.0, false);
     var out: IrradianceOut;
     let pre = albedo_power(albedo, texture_space.params.z);
-    out.irradiance = vec4<f32>(pre * (s.irradiance + lights.ambient.rgb + s.transmitted), 1.0);
+    out.irradiance = vec4<f32>(pre * (s.irradiance + lights.ambient + s.transmitted), 1.0);
     out.stretch = stretch;
     return out;
 }

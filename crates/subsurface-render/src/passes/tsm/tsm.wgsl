@@ -15,7 +15,7 @@ struct TsmOut {
 @vertex
 fn vs_tsm(v: VertexIn) -> TsmOut {
     var out: TsmOut;
-    out.clip = tsm_view.view_proj * (object.model * vec4<f32>(v.position, 1.0));
+    out.clip = tsm_view.view_proj * world_position(v);
     out.uv = v.uv;
     return out;
 }
