@@ -204,6 +204,9 @@ pub fn replicate(scene: &Scene, n: u32) -> Scene {
     let s = 1.0 / cols as f32;
     let mut out = scene.clone();
     out.objects.clear();
+    // The description keeps one entry per object (the scene's invariant), so per-object
+    // edits such as bench's distinct profiles reach both.
+    out.desc.objects.clear();
     for k in 0..n {
         let (c, r) = (k % cols, k / cols);
         let cell = Vec3::new(
@@ -214,10 +217,19 @@ pub fn replicate(scene: &Scene, n: u32) -> Scene {
         let m = Mat4::from_translation(centre + cell)
             * Mat4::from_scale(Vec3::splat(s))
             * Mat4::from_translation(-centre);
-        for o in &scene.objects {
-            let mut copy = o.clone();
-            copy.transform = m * o.transform;
-            out.objects.push(copy);
+        for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {
+            let transform = m * o.transform;
+            out.objects.push(subsurface_render::scene::Object {
+                transform,
+                ..o.clone()
+            });
+            let (scale, rotation, translation) = transform.to_scale_rotation_translation();
+            let mut desc = d.clone();
+            desc.translation = translation.to_array();
+            let (x, y, z) = rotation.to_euler(glam::EulerRot::XYZ);
+            desc.rotation_deg = [x, y, z].map(f32::to_degrees);
+            desc.scale = scale.x;
+            out.desc.objects.push(desc);
         }
     }
     out

@@ -4,6 +4,7 @@
 //! diffuse, specular, linear depth, SSS strength) -> composite and filmic tone map -> image.
 //! Each pass lives in [`passes`] with its WGSL beside it and can be used on its own textures.
 
+pub mod budget;
 pub mod error;
 pub mod gpu;
 pub mod gpu_scene;
