@@ -413,44 +413,75 @@ fn seeds_load() {
     }
 }
 
+/// `SUBSURFACE_FUZZ_SECONDS=N` turns the replay into a fuzzing run: mutants of every seed in
+/// turn, from a fresh random seed (`SUBSURFACE_FUZZ_SEED`, else the clock), until N seconds
+/// have passed (tools/fuzz.sh). Without it, the fixed replay below runs in `cargo test`.
+fn fuzz_budget() -> Option<(std::time::Duration, u64)> {
+    let secs: f64 = std::env::var("SUBSURFACE_FUZZ_SECONDS")
+        .ok()?
+        .parse()
+        .ok()?;
+    let seed = std::env::var("SUBSURFACE_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(1, |d| d.as_nanos() as u64)
+        });
+    Some((std::time::Duration::from_secs_f64(secs), seed | 1))
+}
+
 #[test]
 fn mutants_never_panic_hang_or_yield_broken_meshes() {
     let t_all = Instant::now();
     let mut failures = Vec::new();
     let (mut accepted, mut rejected) = (0, 0);
     let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    for (s, (seed_name, seed)) in seeds().iter().enumerate() {
-        let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ (s as u64 + 1).wrapping_mul(0x1234_5678_9abc));
-        let n = if s == 0 { MUTANTS_HAND } else { MUTANTS_SMALL };
-        for i in 0..n {
-            let bytes = mutant(&mut rng, seed);
-            let name = format!("{seed_name}#{i}");
-            let t0 = Instant::now();
-            let r = std::panic::catch_unwind(|| load_gltf_slice(&bytes, &name));
-            let dt = t0.elapsed();
-            let problem = match &r {
-                Err(_) => Some("panicked".to_string()),
-                Ok(_) if dt > TIME_LIMIT => Some(format!("took {dt:?}")),
-                Ok(Err(e)) => {
-                    rejected += 1;
-                    let e = e.to_string();
-                    let ok = e.starts_with(&format!("{name}: ")) && !e.contains('\n');
-                    (!ok).then(|| format!("bad message {e:?}"))
+    let budget = fuzz_budget();
+    let seeds = seeds();
+    let rounds = if budget.is_some() { usize::MAX } else { 1 };
+    'run: for round in 0..rounds {
+        for (s, (seed_name, seed)) in seeds.iter().enumerate() {
+            let base = budget.map_or(0x9e37_79b9_7f4a_7c15, |(_, b)| {
+                b ^ (round as u64).wrapping_mul(0x9e37_79b9)
+            });
+            let mut rng = Rng(base ^ (s as u64 + 1).wrapping_mul(0x1234_5678_9abc));
+            let n = if s == 0 { MUTANTS_HAND } else { MUTANTS_SMALL };
+            for i in 0..n {
+                if budget.is_some_and(|(d, _)| t_all.elapsed() > d) {
+                    break 'run;
                 }
-                Ok(Ok(m)) => {
-                    accepted += 1;
-                    check_model(m).err()
+                let bytes = mutant(&mut rng, seed);
+                let name = format!("{seed_name}#{i}");
+                let t0 = Instant::now();
+                let r = std::panic::catch_unwind(|| load_gltf_slice(&bytes, &name));
+                let dt = t0.elapsed();
+                let problem = match &r {
+                    Err(_) => Some("panicked".to_string()),
+                    Ok(_) if dt > TIME_LIMIT => Some(format!("took {dt:?}")),
+                    Ok(Err(e)) => {
+                        rejected += 1;
+                        let e = e.to_string();
+                        let ok = e.starts_with(&format!("{name}: ")) && !e.contains('\n');
+                        (!ok).then(|| format!("bad message {e:?}"))
+                    }
+                    Ok(Ok(m)) => {
+                        accepted += 1;
+                        check_model(m).err()
+                    }
+                };
+                if let Some(p) = problem {
+                    let file = out_dir.join(format!("mesh_fuzz_{seed_name}_{i}.bin"));
+                    let _ = std::fs::write(&file, &bytes);
+                    failures.push(format!("{name}: {p} (input saved to {})", file.display()));
                 }
-            };
-            if let Some(p) = problem {
-                let file = out_dir.join(format!("mesh_fuzz_{seed_name}_{i}.bin"));
-                let _ = std::fs::write(&file, &bytes);
-                failures.push(format!("{name}: {p} (input saved to {})", file.display()));
             }
         }
     }
     eprintln!(
-        "{accepted} mutants loaded, {rejected} rejected, in {:?}",
+        "{accepted} mutants loaded, {rejected} rejected ({} executions), in {:?}",
+        accepted + rejected,
         t_all.elapsed()
     );
     assert!(
