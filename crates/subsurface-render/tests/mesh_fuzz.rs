@@ -231,12 +231,18 @@ fn plant(rng: &mut Rng, root: &mut Value) {
             return;
         }
         let n = prims.len();
-        let prim = &mut prims[rng.below(n)];
+        // Earlier mutations may have made the primitive or its attributes a non-object;
+        // serde_json's IndexMut panics on those, so plant only into objects.
+        let Some(prim) = prims[rng.below(n)].as_object_mut() else {
+            return;
+        };
         if rng.below(2) == 0 {
-            prim["attributes"][rng.pick(SEMANTICS)] = v(&small);
+            if let Some(a) = prim.get_mut("attributes").and_then(Value::as_object_mut) {
+                a.insert(rng.pick(SEMANTICS).to_string(), v(&small));
+            }
         } else {
             let (k, val) = rng.pick(PRIMITIVE_FIELDS);
-            prim[k] = v(val);
+            prim.insert(k.to_string(), v(val));
         }
         return;
     }
