@@ -14,9 +14,7 @@ use crate::mesh::Vertex;
 use crate::passes::transmittance::lut_texture;
 use crate::scene::{LightDesc, LightKind, Object, Scene};
 use crate::settings::RenderSettings;
-use crate::uniforms::{
-    CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat, v4,
-};
+use crate::uniforms::{CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat};
 
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -450,15 +448,16 @@ fn light_uniform(
     let cos_outer = l.outer_angle_deg.to_radians().cos();
     let cos_inner = l.inner_angle_deg.to_radians().cos().max(cos_outer + 1e-4);
     let u = LightUniform {
-        position: v4(origin, kind),
-        direction: v4(dir, first),
-        color: v4(colour, l.shadow_bias),
-        spot: [
-            cos_outer,
-            cos_inner,
-            l.shadow_map_size.max(1) as f32 / atlas_size as f32,
-            1.0 / atlas_size as f32,
-        ],
+        position: origin.to_array(),
+        kind,
+        direction: dir.to_array(),
+        first_layer: first,
+        color: colour.to_array(),
+        shadow_bias: l.shadow_bias,
+        cos_outer,
+        cos_inner,
+        shadow_uv_scale: l.shadow_map_size.max(1) as f32 / atlas_size as f32,
+        atlas_texel: 1.0 / atlas_size as f32,
         view_proj: vp,
     };
     let layers = views

@@ -128,12 +128,7 @@ fn light_kinds(lights: &gpu_scene::LightSetup, count: usize) -> Vec<[f32; 4]> {
     (0..count)
         .map(|i| {
             let l = &lights.uniform.lights[i];
-            [
-                l.position[3],
-                l.direction[0],
-                l.direction[1],
-                l.direction[2],
-            ]
+            [l.kind, l.direction[0], l.direction[1], l.direction[2]]
         })
         .collect()
 }

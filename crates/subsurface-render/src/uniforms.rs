@@ -22,10 +22,24 @@ pub struct CameraUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct LightUniform {
-    pub position: [f32; 4],
-    pub direction: [f32; 4],
-    pub color: [f32; 4],
-    pub spot: [f32; 4],
+    /// The shadow camera's origin for directional lights.
+    pub position: [f32; 3],
+    /// `KIND_POINT`, `KIND_SPOT` or `KIND_DIRECTIONAL` of common.wgsl.
+    pub kind: f32,
+    /// Unit, light -> target.
+    pub direction: [f32; 3],
+    /// First shadow-map layer, -1 = no shadow map.
+    pub first_layer: f32,
+    /// Colour x intensity.
+    pub color: [f32; 3],
+    /// Scene units.
+    pub shadow_bias: f32,
+    pub cos_outer: f32,
+    pub cos_inner: f32,
+    /// This light's share of the atlas layer, in uv.
+    pub shadow_uv_scale: f32,
+    /// One atlas texel, in uv.
+    pub atlas_texel: f32,
     pub view_proj: [[[f32; 4]; 4]; 6],
 }
 

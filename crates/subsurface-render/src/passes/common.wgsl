@@ -18,10 +18,16 @@ struct Camera {
 };
 
 struct Light {
-    position: vec4<f32>,   // xyz, w = kind
-    direction: vec4<f32>,  // xyz unit (light -> target), w = first shadow layer or -1
-    color: vec4<f32>,      // rgb = colour * intensity, w = shadow bias (scene units)
-    spot: vec4<f32>,       // cos(outer), cos(inner), shadow uv scale, atlas texel size (uv)
+    position: vec3<f32>,   // the shadow camera's origin for directional lights
+    kind: f32,             // KIND_POINT, KIND_SPOT or KIND_DIRECTIONAL
+    direction: vec3<f32>,  // unit, light -> target
+    first_layer: f32,      // first shadow-map layer, -1 = no shadow map
+    color: vec3<f32>,      // colour x intensity
+    shadow_bias: f32,      // scene units
+    cos_outer: f32,        // spot cone: cosines of the outer and inner half-angles
+    cos_inner: f32,
+    shadow_uv_scale: f32,  // this light's share of the atlas layer, in uv
+    atlas_texel: f32,      // one atlas texel, in uv
     view_proj: array<mat4x4<f32>, 6>, // one per shadow layer (six cube faces for point lights)
 };
 
@@ -72,20 +78,20 @@ struct VertexIn {
 // The distance stored in shadow maps: Euclidean distance to point and spot lights, distance
 // along the light direction for directional lights. Linear, in scene units, so thickness
 // (Jimenez et al. 2010, Figure 7) is a plain difference of two such distances.
-fn light_distance(light_pos: vec4<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> f32 {
-    if (light_pos.w == KIND_DIRECTIONAL) {
-        return dot(p - light_pos.xyz, light_dir);
+fn light_distance(kind: f32, origin: vec3<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> f32 {
+    if (kind == KIND_DIRECTIONAL) {
+        return dot(p - origin, light_dir);
     }
-    return length(p - light_pos.xyz);
+    return length(p - origin);
 }
 
 // Unit vector from p towards the light (the light's own direction reversed for directional
 // lights, which are infinitely far).
-fn light_direction(light_pos: vec4<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
-    if (light_pos.w == KIND_DIRECTIONAL) {
+fn light_direction(kind: f32, origin: vec3<f32>, light_dir: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    if (kind == KIND_DIRECTIONAL) {
         return -light_dir;
     }
-    return normalize(light_pos.xyz - p);
+    return normalize(origin - p);
 }
 
 // Object space to world: every pass that draws meshes places them the same way.

@@ -58,12 +58,12 @@ fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     sc.inside = false;
     sc.layer = -1;
     sc.uv = vec2<f32>(0.0);
-    if (light.direction.w < 0.0) {
+    if (light.first_layer < 0.0) {
         return sc;
     }
     var face = 0u;
-    if (light.position.w == KIND_POINT) {
-        face = cube_face(p - light.position.xyz);
+    if (light.kind == KIND_POINT) {
+        face = cube_face(p - light.position);
     }
     let clip = light.view_proj[face] * vec4<f32>(p, 1.0);
     if (clip.w <= 0.0) {
@@ -71,7 +71,7 @@ fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     }
     let ndc = clip.xyz / clip.w;
     sc.uv = ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
-    sc.layer = i32(light.direction.w) + i32(face);
+    sc.layer = i32(light.first_layer) + i32(face);
     sc.inside = all(sc.uv >= vec2<f32>(0.0)) && all(sc.uv <= vec2<f32>(1.0));
     return sc;
 }
@@ -83,8 +83,8 @@ fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     if (!sc.inside) {
         return 1.0;
     }
-    let size = light.spot.z / light.spot.w; // this light's map size in texels
-    let d = light_distance(light.position, light.direction.xyz, p) - light.color.w;
+    let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
+    let d = light_distance(light.kind, light.position, light.direction, p) - light.shadow_bias;
     let t = sc.uv * size - vec2<f32>(0.5);
     let base = floor(t) - vec2<f32>(1.0);
     let f = t - floor(t);
@@ -180,17 +180,17 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
-        let l = light_direction(light.position, light.direction.xyz, world);
+        let l = light_direction(light.kind, light.position, light.direction, world);
         var attenuation = 1.0;
-        if (light.position.w != KIND_DIRECTIONAL) {
-            let to_light = light.position.xyz - world;
+        if (light.kind != KIND_DIRECTIONAL) {
+            let to_light = light.position - world;
             attenuation = 1.0 / max(dot(to_light, to_light), 1e-8);
         }
         var spot = 1.0;
-        if (light.position.w == KIND_SPOT) {
-            spot = smoothstep(light.spot.x, light.spot.y, dot(-l, light.direction.xyz));
+        if (light.kind == KIND_SPOT) {
+            spot = smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
         }
-        let radiance = light.color.rgb * attenuation * spot;
+        let radiance = light.color * attenuation * spot;
         let dark = all(radiance <= vec3<f32>(0.0));
         if (dark && !with_tsm) {
             continue;

@@ -25,5 +25,10 @@ fn vs_main(v: VertexIn) -> ShadowOut {
 
 @fragment
 fn fs_main(in: ShadowOut) -> @location(0) f32 {
-    return light_distance(shadow_view.light_position, shadow_view.light_direction.xyz, in.world);
+    return light_distance(
+        shadow_view.light_position.w,
+        shadow_view.light_position.xyz,
+        shadow_view.light_direction.xyz,
+        in.world,
+    );
 }

@@ -5,7 +5,7 @@
 // softer thickness that 000_* suggests (a single texel turns shadow-map aliasing into
 // high-frequency transmitted light). Empty texels (nothing seen by the light) are skipped.
 fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> f32 {
-    let size = light.spot.z / light.spot.w;
+    let size = light.shadow_uv_scale / light.atlas_texel;
     let centre = vec2<i32>(floor(sc.uv * size));
     let max_texel = vec2<i32>(i32(size) - 1);
     let h = max(taps, 1) / 2;
@@ -55,7 +55,7 @@ fn diffusion_transmittance(s_mm: f32) -> vec3<f32> {
 // object's profile; < 0 where it is unknown (no shadow map, outside it, not translucent).
 fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     // Only lights with a shadow map know the thickness: the others add nothing (no glow).
-    if (light.direction.w < 0.0 || object.translucency <= 0.0) {
+    if (light.first_layer < 0.0 || object.translucency <= 0.0) {
         return -1.0;
     }
     // Shrink along the vertex normal so points at the silhouette project inside the object
@@ -70,7 +70,7 @@ fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     if (d_in < 0.0) {
         return -1.0;
     }
-    let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
+    let s_units = abs(light_distance(light.kind, light.position, light.direction, shrunk) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
     return s_units / (object.world_per_mm * object.translucency);
 }
@@ -89,7 +89,7 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
-        let l = light_direction(light.position, light.direction.xyz, p);
+        let l = light_direction(light.kind, light.position, light.direction, p);
         if (back_irradiance(n_vertex, l) <= 0.0) {
             continue;
         }
@@ -143,7 +143,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
 // the shaded point: a point the light sees is its own entry point, so it gets (1 - lit), and
 // the term fades in between 0.25 and 1 mm of thickness for the same reason.
 fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) -> vec3<f32> {
-    if (light.direction.w < 0.0 || object.translucency <= 0.0 || lit >= 1.0) {
+    if (light.first_layer < 0.0 || object.translucency <= 0.0 || lit >= 1.0) {
         return vec3<f32>(0.0);
     }
     let shrunk = p - n_vertex * lights.normal_shrink;
@@ -155,9 +155,9 @@ fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) 
     if (d_in < 0.0) {
         return vec3<f32>(0.0);
     }
-    let s_units = abs(light_distance(light.position, light.direction.xyz, shrunk) - d_in);
+    let s_units = abs(light_distance(light.kind, light.position, light.direction, shrunk) - d_in);
     let s_mm = s_units / (object.world_per_mm * object.translucency);
-    let size = light.spot.z / light.spot.w;
+    let size = light.shadow_uv_scale / light.atlas_texel;
     let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
     let uv_in = textureLoad(tsm_atlas, texel, sc.layer, 0).xy;
     if (uv_in.x < 0.0) {
