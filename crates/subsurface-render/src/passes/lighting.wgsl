@@ -28,6 +28,9 @@ fn vs_main(v: VertexIn) -> LitVarying {
     return out;
 }
 
+// Largest finite half float: what the Rgba16Float radiance targets can hold.
+const HALF_MAX: f32 = 65504.0;
+
 struct GBuffer {
     @location(0) diffuse: vec4<f32>,
     @location(1) specular: vec4<f32>,
@@ -190,7 +193,10 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         if (light.kind == KIND_SPOT) {
             spot = smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
         }
-        let radiance = light.color * attenuation * spot;
+        // Saturate before the spot factor: a light bright enough to overflow f32 at this
+        // distance would otherwise turn inf x 0 into NaN outside its cone (black pixels);
+        // the half-float targets cannot hold more anyway.
+        let radiance = min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
         let dark = all(radiance <= vec3<f32>(0.0));
         if (dark && !with_tsm) {
             continue;
@@ -251,7 +257,10 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         // Thickness debug view (tonemap.wgsl reads it back from diffuse.r).
         out.diffuse = vec4<f32>(min_thickness_mm(in.world, n_vertex), 0.0, 0.0, 1.0);
     }
-    out.specular = vec4<f32>(s.specular, 1.0);
+    // Sums of many saturated lights could still pass the half-float range: clamp rather than
+    // let the target round to infinity (which the blur would spread as NaN).
+    out.diffuse = vec4<f32>(min(out.diffuse.rgb, vec3<f32>(HALF_MAX)), 1.0);
+    out.specular = vec4<f32>(min(s.specular, vec3<f32>(HALF_MAX)), 1.0);
     out.depth = dot(in.world - camera.position, camera.forward);
     out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), 0.0);
     return out;
