@@ -11,7 +11,8 @@ use subsurface_render::{
     GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod,
 };
 
-use crate::output::PendingFile;
+use crate::output::{PendingFile, print_summary};
+use crate::plot;
 use crate::settings_args::{load_scene, replicate};
 
 #[derive(Args, Debug)]
@@ -68,7 +69,8 @@ pub struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Draw GPU time against the number of characters, one line per method.
+    /// Draw GPU time against the number of characters, one line per method; `-` writes the
+    /// PNG to standard output and the table to standard error.
     #[arg(long, value_name = "FILE.png")]
     pub plot: Option<PathBuf>,
 }
@@ -156,6 +158,16 @@ fn distinct_profiles(scene: &mut Scene, n: u32) {
 /// Passes that belong to subsurface scattering (screen or texture space).
 fn is_sss_pass(name: &str) -> bool {
     name == "sss" || name.starts_with("texture")
+}
+
+/// GPU time of the subsurface-scattering passes among `passes`.
+fn sss_ms(passes: &[PassTiming]) -> f64 {
+    // A fold from +0.0, not `sum` (which starts at -0.0): no SSS pass prints as 0.000.
+    passes
+        .iter()
+        .filter(|p| is_sss_pass(&p.name))
+        .map(|p| p.ms)
+        .fold(0.0, |a, b| a + b)
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -249,14 +261,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         frames: args.frames,
         runs,
     };
+    // With the plot on stdout (`--plot -`), the table goes to stderr.
+    let stdout_taken = pending_plot
+        .as_ref()
+        .is_some_and(PendingFile::writes_to_stdout);
     if let Some(p) = pending_plot {
         plot(p, &report)?;
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+    let text = if args.json {
+        format!("{}\n", serde_json::to_string_pretty(&report)?)
     } else {
-        print_table(&report);
-    }
+        table(&report)
+    };
+    print_summary(stdout_taken, &text);
     Ok(())
 }
 
@@ -297,11 +314,7 @@ fn summarise(
             .map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum())
             .collect(),
     );
-    let sss_ms: f64 = passes
-        .iter()
-        .filter(|p| is_sss_pass(&p.name))
-        .map(|p| p.ms)
-        .sum();
+    let sss_ms = sss_ms(&passes);
     Run {
         characters: n,
         profiles: 1,
@@ -316,13 +329,13 @@ fn summarise(
     }
 }
 
-fn print_table(report: &Report) {
-    println!(
-        "{} — median of {} frames after {} warm-up",
+fn table(report: &Report) -> String {
+    let mut out = format!(
+        "{} — median of {} frames after {} warm-up\n",
         report.adapter, report.frames, report.warmup
     );
-    println!(
-        "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}",
+    out += &format!(
+        "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}\n",
         "chars",
         "profiles",
         "size",
@@ -336,14 +349,9 @@ fn print_table(report: &Report) {
     );
     for r in &report.runs {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
-        let sss: f64 = r
-            .passes
-            .iter()
-            .filter(|p| is_sss_pass(&p.name))
-            .map(|p| p.ms)
-            .fold(0.0, |a, b| a + b);
-        println!(
-            "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}",
+        let sss = sss_ms(&r.passes);
+        out += &format!(
+            "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
             r.characters,
             r.profiles,
             format!("{}x{}", r.width, r.height),
@@ -356,22 +364,18 @@ fn print_table(report: &Report) {
             r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
         );
     }
+    out
 }
 
 const PLOT_SIZE: (u32, u32) = (900, 560);
 
 /// Frame time (solid) and SSS time (dashed) against the number of characters, per method.
 fn plot(pending: PendingFile, report: &Report) -> Result<()> {
-    crate::cmd_profile::register_font();
-    let mut buf = vec![0u8; (PLOT_SIZE.0 * PLOT_SIZE.1 * 3) as usize];
-    draw(&mut buf, report).map_err(|e| anyhow::anyhow!("--plot: {e}"))?;
-    let img = image::RgbImage::from_raw(PLOT_SIZE.0, PLOT_SIZE.1, buf).context("plot buffer")?;
+    let img = plot::draw_image(PLOT_SIZE, |root| draw(root, report)).context("--plot")?;
     pending.write_png(&image::DynamicImage::ImageRgb8(img).to_rgba8())
 }
 
-fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error>> {
-    let root = BitMapBackend::with_buffer(buf, PLOT_SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
+fn draw(root: &plot::Area, report: &Report) -> plot::DrawResult {
     let max_n = report
         .runs
         .iter()
@@ -386,7 +390,7 @@ fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error
         .fold(0.0, f64::max)
         .max(1e-3)
         * 1.1;
-    let mut chart = ChartBuilder::on(&root)
+    let mut chart = ChartBuilder::on(root)
         .caption(
             format!("GPU time vs characters — {}", report.adapter),
             ("sans-serif", 18),
@@ -414,36 +418,13 @@ fn draw(buf: &mut [u8], report: &Report) -> Result<(), Box<dyn std::error::Error
             .iter()
             .filter(|r| r.sss == *sss && &r.transmittance == tm && r.width == *w && r.height == *h)
             .collect();
-        let sss_ms = |r: &Run| {
-            r.passes
-                .iter()
-                .filter(|p| is_sss_pass(&p.name))
-                .map(|p| p.ms)
-                .sum::<f64>()
-        };
-        chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|r| (r.characters as f64, r.frame_ms)),
-                colour.stroke_width(2),
-            ))?
-            .label(format!("{sss} {tm} {w}x{h}"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
-        chart.draw_series(DashedLineSeries::new(
-            pts.iter().map(|r| (r.characters as f64, sss_ms(r))),
-            6,
-            4,
-            colour.stroke_width(2),
-        ))?;
+        let frame = pts.iter().map(|r| (r.characters as f64, r.frame_ms));
+        plot::line(&mut chart, frame, colour, format!("{sss} {tm} {w}x{h}"))?;
+        let sss = pts.iter().map(|r| (r.characters as f64, sss_ms(&r.passes)));
+        plot::dashed(&mut chart, sss, colour, (6, 4))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+    // plotters' default size for legend text.
+    plot::legend(&mut chart, 12)
 }
 
 #[cfg(test)]

@@ -2,9 +2,8 @@
 //! printing blur kernels, Gaussian fits of diffusion profiles and their plots.
 
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use plotters::prelude::*;
 use subsurface_profile::{
     DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GaussianFit, KernelParams, Material,
@@ -12,9 +11,8 @@ use subsurface_profile::{
     separable_range_for,
 };
 
-/// Bundled so plot text renders the same everywhere (Bitstream Vera licence,
-/// see assets/fonts/DejaVuSans-LICENSE.txt).
-static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+use crate::output::{PendingFile, is_stdout, print_summary};
+use crate::plot;
 
 /// Print the separable subsurface-scattering blur kernel (Jimenez et al. 2015).
 #[derive(Debug, Clone, clap::Args)]
@@ -74,7 +72,8 @@ pub struct ProfileArgs {
     #[arg(long, value_name = "MM")]
     pub thickness: Option<f64>,
 
-    /// Also draw R(r) (log scale) with its fit and T(s), per channel, into this PNG file.
+    /// Also draw R(r) (log scale) with its fit and T(s), per channel, into this PNG file;
+    /// `-` writes it to standard output and the text to standard error.
     #[arg(long, value_name = "FILE.png")]
     pub plot: Option<PathBuf>,
 
@@ -274,85 +273,52 @@ fn describe_fit(fit: &GaussianFit) -> String {
 
 /// `subsurface profile`.
 pub fn run_profile(args: &ProfileArgs) -> Result<()> {
-    let plot = args.plot.as_deref().map(check_plot_path).transpose()?;
+    let plot = args.plot.as_deref().map(create_plot).transpose()?;
     let m = load_material(&args.material, args.thickness)?;
     let fit = fit_material(&m, args.gaussians)?;
-    if args.json {
+    // With the plot on stdout (`--plot -`), the text goes to stderr.
+    let stdout_taken = plot.as_ref().is_some_and(PendingFile::writes_to_stdout);
+    let text = if args.json {
         let json = serde_json::json!({
             "material": m,
             "total_reflectance": m.total_reflectance(),
             "fit": fit,
         });
-        println!("{}", serde_json::to_string_pretty(&json)?);
+        format!("{}\n", serde_json::to_string_pretty(&json)?)
     } else {
-        print!("{}", describe_material(&m));
-        print!("{}", describe_fit(&fit));
-    }
-    if let Some(path) = plot {
-        write_plot(&path, &m, &fit)?;
+        describe_material(&m) + &describe_fit(&fit)
+    };
+    print_summary(stdout_taken, &text);
+    if let (Some(pending), Some(path)) = (plot, &args.plot) {
+        write_plot(pending, &m, &fit)?;
         if !args.json {
-            println!("plot: {}", path.display());
+            print_summary(stdout_taken, &format!("plot: {}\n", path.display()));
         }
     }
     Ok(())
 }
 
-fn check_plot_path(path: &Path) -> Result<PathBuf> {
-    let ok = path
+/// Checks `--plot` before any work: a PNG file name (or standard output) that can be written.
+fn create_plot(path: &Path) -> Result<PendingFile> {
+    let png = path
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !ok || path.file_name().is_none() {
+    if !png && !is_stdout(path) {
         bail!(
             "--plot: file name must end in .png (got {})",
             path.display()
         );
     }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        bail!("--plot: directory {} does not exist", dir.display());
-    }
-    Ok(path.to_path_buf())
+    PendingFile::create(path).context("--plot")
 }
 
 const PLOT_SIZE: (u32, u32) = (1400, 560);
 
-/// Renders to memory, writes a temporary file beside `path` and renames it, so
-/// a failure never leaves a partial PNG behind.
-fn write_plot(path: &Path, m: &Material, fit: &GaussianFit) -> Result<()> {
-    let (w, h) = PLOT_SIZE;
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    draw_plot(&mut buf, m, fit).map_err(|e| anyhow!("--plot: drawing failed: {e}"))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().expect("checked").to_string_lossy();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = image::save_buffer_with_format(
-        &tmp,
-        &buf,
-        w,
-        h,
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(anyhow::Error::from)
-    .and_then(|()| std::fs::rename(&tmp, path).map_err(anyhow::Error::from));
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(anyhow!("--plot: cannot write {}: {e}", path.display()));
-    }
-    Ok(())
-}
-
-pub(crate) fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // Only fails for a malformed font, which the bundled file is not.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
+/// Draws the plot and writes it; nothing is left behind if either fails.
+fn write_plot(pending: PendingFile, m: &Material, fit: &GaussianFit) -> Result<()> {
+    let img = plot::draw_image(PLOT_SIZE, |root| draw_plot(root, m, fit)).context("--plot")?;
+    pending.write_png(&img).context("--plot")
 }
 
 const CHANNEL_COLORS: [RGBColor; 3] = [
@@ -362,19 +328,11 @@ const CHANNEL_COLORS: [RGBColor; 3] = [
 ];
 const CHANNEL_NAMES: [&str; 3] = ["R", "G", "B"];
 
-fn draw_plot(
-    buf: &mut [u8],
-    m: &Material,
-    fit: &GaussianFit,
-) -> Result<(), Box<dyn std::error::Error>> {
-    register_font();
-    let root = BitMapBackend::with_buffer(buf, PLOT_SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
+/// Left: R(r) and the fit on a log axis, over the fitted range. Right: T(s) of the fit.
+fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawResult {
     let (left, right) = root.split_horizontally(PLOT_SIZE.0 / 2);
-
-    // Left: R(r) and the fit on a log axis, over the fitted range.
-    let r_max = fit.r_max_mm;
     let n = 400;
+    let r_max = fit.r_max_mm;
     let rs: Vec<f64> = (0..=n).map(|i| r_max * i as f64 / n as f64).collect();
     let exact: Vec<[f64; 3]> = rs.iter().map(|&r| m.profile(r)).collect();
     let fitted: Vec<[f64; 3]> = rs.iter().map(|&r| fit.profile.eval(r)).collect();
@@ -405,31 +363,18 @@ fn draw_plot(
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style(("sans-serif", 14))
         .draw()?;
-    for c in 0..3 {
-        let color = CHANNEL_COLORS[c];
-        let clamp = |v: f64| v.max(y_min);
-        chart
-            .draw_series(LineSeries::new(
-                rs.iter().zip(&exact).map(|(&r, v)| (r, clamp(v[c]))),
-                color.stroke_width(2),
-            ))?
-            .label(format!("{} profile", CHANNEL_NAMES[c]))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-        chart.draw_series(DashedLineSeries::new(
-            rs.iter().zip(&fitted).map(|(&r, v)| (r, clamp(v[c]))),
-            8,
-            5,
-            color.stroke_width(2),
-        ))?;
+    for (c, color) in CHANNEL_COLORS.into_iter().enumerate() {
+        let channel = |v: &[[f64; 3]]| -> Vec<(f64, f64)> {
+            rs.iter()
+                .zip(v)
+                .map(|(&r, v)| (r, v[c].max(y_min)))
+                .collect()
+        };
+        let label = format!("{} profile", CHANNEL_NAMES[c]);
+        plot::line(&mut chart, channel(&exact), color, label)?;
+        plot::dashed(&mut chart, channel(&fitted), color, (8, 5))?;
     }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", 14))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
+    plot::legend(&mut chart, 14)?;
 
     // Right: T(s) of the fit, normalised so T(0) = 1 as the skin shader uses it.
     let t_profile: SumOfGaussians = fit
@@ -458,26 +403,11 @@ fn draw_plot(
         .y_desc("T(s)")
         .label_style(("sans-serif", 14))
         .draw()?;
-    for c in 0..3 {
-        let color = CHANNEL_COLORS[c];
-        chart
-            .draw_series(LineSeries::new(
-                ss.iter().map(|&s| (s, t_profile.transmittance(s)[c])),
-                color.stroke_width(2),
-            ))?
-            .label(CHANNEL_NAMES[c])
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+    for (c, color) in CHANNEL_COLORS.into_iter().enumerate() {
+        let points = ss.iter().map(|&s| (s, t_profile.transmittance(s)[c]));
+        plot::line(&mut chart, points, color, CHANNEL_NAMES[c])?;
     }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", 14))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+    plot::legend(&mut chart, 14)
 }
 
 #[cfg(test)]
@@ -584,7 +514,7 @@ mod tests {
         let path = dir.join("skin.png");
         let m = material("skin").unwrap();
         let fit = m.fit(6).unwrap();
-        write_plot(&path, &m, &fit).unwrap();
+        write_plot(create_plot(&path).unwrap(), &m, &fit).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
         let img = image::open(&path).unwrap();
@@ -595,10 +525,28 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names.len(), 1, "{names:?}");
-        // A missing directory fails without leaving anything behind.
+        // A missing directory fails before any work, without leaving anything behind.
         let bad = dir.join("missing").join("x.png");
-        let e = write_plot(&bad, &m, &fit).unwrap_err().to_string();
-        assert!(e.starts_with("--plot: cannot write"), "{e}");
+        let e = format!("{:#}", create_plot(&bad).err().unwrap());
+        assert!(
+            e.starts_with("--plot: ") && e.ends_with("does not exist"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn plot_may_go_to_stdout_but_a_file_must_be_a_png() {
+        assert!(create_plot(Path::new("-")).unwrap().writes_to_stdout());
+        if cfg!(target_os = "linux") {
+            let p = create_plot(Path::new("/dev/stdout")).unwrap();
+            assert!(p.writes_to_stdout());
+        }
+        let e = create_plot(Path::new("plot.jpg"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert_eq!(e, "--plot: file name must end in .png (got plot.jpg)");
     }
 }

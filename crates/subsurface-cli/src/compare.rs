@@ -17,7 +17,7 @@ use clap::Args;
 use serde::{Deserialize, Serialize};
 use subsurface_render::{GpuContext, RenderOptions, Renderer};
 
-use crate::output::PendingFile;
+use crate::output::{PendingFile, is_stdout, print_summary};
 use crate::settings_args::{SettingsArgs, load_scene};
 
 #[derive(Args, Debug)]
@@ -218,24 +218,28 @@ pub mod flip {
     /// Separable convolution of one channel with clamped borders.
     fn convolve(src: &[f32], w: usize, h: usize, kx: &[f32], ky: &[f32]) -> Vec<f32> {
         let (rx, ry) = (kx.len() / 2, ky.len() / 2);
-        let mut tmp = vec![0.0; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let mut s = 0.0;
-                for (i, k) in kx.iter().enumerate() {
-                    let xx = (x + i).saturating_sub(rx).min(w - 1);
-                    s += k * src[y * w + xx];
-                }
-                tmp[y * w + x] = s;
-            }
-        }
+        let rows = convolve_1d(src, w, h, kx, |x, y, i| {
+            y * w + (x + i).saturating_sub(rx).min(w - 1)
+        });
+        convolve_1d(&rows, w, h, ky, |x, y, i| {
+            (y + i).saturating_sub(ry).min(h - 1) * w + x
+        })
+    }
+
+    /// One pass of [`convolve`]: pixel (x, y) is the sum of `k[i] * src[tap(x, y, i)]`.
+    fn convolve_1d(
+        src: &[f32],
+        w: usize,
+        h: usize,
+        k: &[f32],
+        tap: impl Fn(usize, usize, usize) -> usize,
+    ) -> Vec<f32> {
         let mut out = vec![0.0; w * h];
         for y in 0..h {
             for x in 0..w {
                 let mut s = 0.0;
-                for (i, k) in ky.iter().enumerate() {
-                    let yy = (y + i).saturating_sub(ry).min(h - 1);
-                    s += k * tmp[yy * w + x];
+                for (i, k) in k.iter().enumerate() {
+                    s += k * src[tap(x, y, i)];
                 }
                 out[y * w + x] = s;
             }
@@ -598,16 +602,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             side.put_pixel(2 * w + x, y, image::Rgb(hot(err[(y * w + x) as usize])));
         }
     }
-    let mut bytes = Vec::new();
-    image::DynamicImage::ImageRgb8(side)
-        .write_to(
-            &mut std::io::Cursor::new(&mut bytes),
-            image::ImageFormat::Png,
-        )
-        .context("PNG encoding failed")?;
-    let mut pending = pending;
-    pending.write_bytes(&bytes)?;
-    pending.commit()?;
+    pending.write_png(&side)?;
 
     Ok(Report {
         reference: args.reference.display().to_string(),
@@ -633,8 +628,8 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let r = compare(args)?;
-    if args.json {
-        println!("{}", serde_json::to_string(&r)?);
+    let text = if args.json {
+        serde_json::to_string(&r)?
     } else {
         let regions: Vec<String> = r
             .regions
@@ -655,7 +650,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             }
             _ => String::new(),
         };
-        println!(
+        format!(
             "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}; wrote {}",
             r.scene,
             r.reference,
@@ -666,7 +661,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             r.flip_mean,
             regions.join(", "),
             r.out
-        );
-    }
+        )
+    };
+    // With the image on stdout (`--out -`), the report goes to stderr.
+    print_summary(is_stdout(&args.out), &format!("{text}\n"));
     Ok(())
 }

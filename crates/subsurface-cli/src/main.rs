@@ -5,6 +5,7 @@ mod cmd_profile;
 mod compare;
 mod export_mitsuba;
 mod output;
+mod plot;
 mod render;
 mod settings_args;
 mod view;

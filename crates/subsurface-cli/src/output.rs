@@ -79,23 +79,20 @@ impl PendingFile {
     }
 
     /// Whether the bytes go to standard output (`-`, `/dev/stdout`), where a summary line
-    /// printed with `println!` would end up inside the file.
-    #[allow(dead_code)] // for render/compare/bench, to move their summary line to stderr
+    /// printed with `println!` would end up inside the file (see [`print_summary`]).
     pub fn writes_to_stdout(&self) -> bool {
         matches!(self.sink, Sink::Stdout)
     }
 
-    /// Encodes `image` as PNG and writes and commits it.
-    pub fn write_png(mut self, image: &image::RgbaImage) -> Result<()> {
+    /// Encodes `image` (8-bit RGB or RGBA) as PNG and writes and commits it.
+    pub fn write_png<P>(mut self, image: &image::ImageBuffer<P, Vec<u8>>) -> Result<()>
+    where
+        P: image::Pixel<Subpixel = u8> + image::PixelWithColorType,
+    {
         use image::ImageEncoder as _;
         let mut bytes = Vec::new();
         image::codecs::png::PngEncoder::new(&mut bytes)
-            .write_image(
-                image.as_raw(),
-                image.width(),
-                image.height(),
-                image::ExtendedColorType::Rgba8,
-            )
+            .write_image(image.as_raw(), image.width(), image.height(), P::COLOR_TYPE)
             .with_context(|| format!("{}: PNG encoding failed", self.dest.display()))?;
         self.write_bytes(&bytes)?;
         self.commit()
@@ -175,6 +172,23 @@ impl Drop for PendingFile {
                 reg.swap_remove(i);
             }
         }
+    }
+}
+
+/// Whether `dest` names standard output (`-`, `/dev/stdout`, a link to it), as
+/// [`PendingFile::create`] would find; checked without writing anything.
+pub fn is_stdout(dest: &Path) -> bool {
+    dest.as_os_str() == "-" || matches!(resolve(dest), Ok(Resolved::Stdout))
+}
+
+/// Prints a command's summary `text` (which ends in its own line feed) on standard output, or
+/// on standard error when `stdout_taken`: the command writes a file to standard output
+/// ([`PendingFile::writes_to_stdout`]), and the text would end up inside it.
+pub fn print_summary(stdout_taken: bool, text: &str) {
+    if stdout_taken {
+        eprint!("{text}");
+    } else {
+        print!("{text}");
     }
 }
 
@@ -363,6 +377,26 @@ mod tests {
         drop(p);
         assert_eq!(std::fs::read(&dest).unwrap(), b"one two");
         assert!(partials(&dir).is_empty());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn stdout_is_recognised_without_writing() {
+        let dir = tempdir("stdout");
+        assert!(is_stdout(Path::new("-")));
+        assert!(
+            PendingFile::create(Path::new("-"))
+                .unwrap()
+                .writes_to_stdout()
+        );
+        if cfg!(target_os = "linux") {
+            assert!(is_stdout(Path::new("/dev/stdout")));
+            assert!(!is_stdout(Path::new("/dev/stderr")));
+        }
+        let file = dir.join("a.png");
+        assert!(!is_stdout(&file));
+        assert!(!PendingFile::create(&file).unwrap().writes_to_stdout());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

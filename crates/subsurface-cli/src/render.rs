@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use subsurface_render::{DebugView, GpuContext, RenderOptions, Renderer};
 
-use crate::output::PendingFile;
+use crate::output::{PendingFile, print_summary};
 use crate::settings_args::{SettingsArgs, load_scene, replicate};
 
 #[derive(Args, Debug)]
@@ -94,6 +94,8 @@ pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
     ctx.check_size("--", opts.width(), opts.height())?;
     let mut renderer = Renderer::new(&ctx, &scene, opts.clone())?;
     let frame = renderer.render().context("rendering failed")?;
+    // The summary must not end up inside a PNG written to stdout (`--out -`).
+    let stdout_taken = pending.writes_to_stdout();
     pending.write_png(&frame.image)?;
     let passes = if frame.timings.is_empty() {
         "no GPU timestamps".to_string()
@@ -106,8 +108,8 @@ pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
         s.push(format!("GPU {:.3} ms", frame.gpu_total_ms()));
         s.join(", ")
     };
-    println!(
-        "{} {}x{} on {}: {}; total {:.0} ms",
+    let summary = format!(
+        "{} {}x{} on {}: {}; total {:.0} ms\n",
         args.out.display(),
         opts.width(),
         opts.height(),
@@ -115,5 +117,6 @@ pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
         passes,
         start.elapsed().as_secs_f64() * 1e3
     );
+    print_summary(stdout_taken, &summary);
     Ok(())
 }

@@ -1,47 +1,11 @@
 //! The `subsurface` binary as users run it: outputs, JSON shapes, and one-line errors with a
 //! non-zero exit and no partial file for bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn subsurface(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_subsurface"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
+use std::process::Output;
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("subsurface-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// GPU-dependent commands are checked only where an adapter exists, or when CI requires one.
-fn gpu_available(dir: &Path) -> bool {
-    let out = subsurface(
-        &[
-            "render",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--out",
-            "probe.png",
-        ],
-        dir,
-    );
-    let ok = out.status.success();
-    if !ok && std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1") {
-        panic!(
-            "SUBSURFACE_REQUIRE_GPU=1 but render failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    ok
-}
+use common::{run_with_gpu, subsurface, tempdir};
 
 fn stderr_line(out: &Output) -> String {
     let s = String::from_utf8_lossy(&out.stderr).to_string();
@@ -57,21 +21,12 @@ fn stderr_line(out: &Output) -> String {
 
 #[test]
 fn render_writes_a_png_and_a_summary_line() {
-    let dir = tempdir("render");
-    if !gpu_available(&dir) {
+    let args = [
+        "render", "--width", "96", "--height", "64", "--out", "hand.png",
+    ];
+    let Some((dir, out)) = run_with_gpu("render", &args) else {
         return;
-    }
-    let out = subsurface(
-        &[
-            "render", "--width", "96", "--height", "64", "--out", "hand.png",
-        ],
-        &dir,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    };
     let img = image::open(dir.join("hand.png")).unwrap();
     assert_eq!((img.width(), img.height()), (96, 64));
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -142,34 +97,25 @@ fn kernel_json_has_n_taps_centre_first() {
 
 #[test]
 fn bench_json_has_runs_with_positive_times() {
-    let dir = tempdir("bench");
-    if !gpu_available(&dir) {
+    let args = [
+        "bench",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--characters",
+        "1,2",
+        "--sss",
+        "none,separable",
+        "--warmup",
+        "1",
+        "--frames",
+        "2",
+        "--json",
+    ];
+    let Some((_, out)) = run_with_gpu("bench", &args) else {
         return;
-    }
-    let out = subsurface(
-        &[
-            "bench",
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--characters",
-            "1,2",
-            "--sss",
-            "none,separable",
-            "--warmup",
-            "1",
-            "--frames",
-            "2",
-            "--json",
-        ],
-        &dir,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    };
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let runs = v["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 4, "2 character counts x 2 methods");

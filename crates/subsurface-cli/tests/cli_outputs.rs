@@ -6,28 +6,19 @@
 //! destination matters more than the content: `--out DIR` writes `DIR/meshes/*.ply` through
 //! temporary files and then `DIR/scene.xml`, which the tests make a link, FIFO or device.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-fn subsurface(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_subsurface"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
+use common::{assert_success, assert_whole_png, bin, skip, subsurface, tempdir, text};
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("subsurface-outputs-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The single line on stderr, which must start with `error: `.
+/// The single line on stderr of a command that failed with exit status 1, which must start
+/// with `error: `.
 fn error_line(out: &Output) -> String {
     let s = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(1), "{s}");
     // lavapipe itself prints "error: XDG_RUNTIME_DIR is invalid" without a display; not ours.
     let lines: Vec<&str> = s
         .lines()
@@ -56,6 +47,35 @@ fn assert_no_partial_files(dirs: &[&Path]) {
     }
 }
 
+/// What the `export-mitsuba` tests run in their directory.
+const EXPORT: [&str; 3] = ["export-mitsuba", "--out", "out"];
+
+/// A scratch directory `name` with an empty folder `out`, and the path of `out/scene.xml`,
+/// which the test makes a link, FIFO or device before it runs [`EXPORT`].
+fn export_dir(name: &str) -> (PathBuf, PathBuf) {
+    let dir = tempdir(name);
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    let xml = dir.join("out/scene.xml");
+    (dir, xml)
+}
+
+/// Asserts that an export into `dir/out` left no partial files there, in `out/meshes` or in
+/// `more`, then removes `dir`.
+fn assert_clean_export(dir: &Path, more: &[&Path]) {
+    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
+    assert_no_partial_files(more);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// [`export_dir`] with `out/scene.xml` a symbolic link to `target`, and [`EXPORT`] run there.
+#[cfg(unix)]
+fn export_through_link(name: &str, target: &str) -> (PathBuf, PathBuf, Output) {
+    let (dir, scene_xml) = export_dir(name);
+    std::os::unix::fs::symlink(target, &scene_xml).unwrap();
+    let out = subsurface(&EXPORT, &dir);
+    (dir, scene_xml, out)
+}
+
 #[cfg(unix)]
 fn mkfifo(path: &Path) {
     let ok = Command::new("mkfifo")
@@ -77,9 +97,7 @@ fn parse_errors_exit_1_with_one_line() {
         (&[], "subcommand"),
     ];
     for (args, mentions) in cases {
-        let out = subsurface(args, &dir);
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
-        let line = error_line(&out);
+        let line = error_line(&subsurface(args, &dir));
         assert!(line.contains(mentions), "{args:?}: {line}");
         assert!(
             !line.contains("Usage") && !line.contains("For more information"),
@@ -112,9 +130,10 @@ fn an_error_that_prints_its_cause_is_not_repeated() {
          [[objects]]\nmesh = { gltf = \"missing.glb\" }\n[objects.material]\n",
     )
     .unwrap();
-    let out = subsurface(&["export-mitsuba", "s.toml", "--out", "x"], &dir);
-    assert_eq!(out.status.code(), Some(1));
-    let line = error_line(&out);
+    let line = error_line(&subsurface(
+        &["export-mitsuba", "s.toml", "--out", "x"],
+        &dir,
+    ));
     assert_eq!(line.matches("missing.glb").count(), 1, "{line}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -122,52 +141,38 @@ fn an_error_that_prints_its_cause_is_not_repeated() {
 #[cfg(unix)]
 #[test]
 fn a_symbolic_link_is_written_through_and_kept() {
-    let dir = tempdir("symlink");
-    std::fs::create_dir_all(dir.join("out")).unwrap();
+    let (dir, scene_xml) = export_dir("symlink");
     std::fs::create_dir_all(dir.join("real")).unwrap();
-    std::os::unix::fs::symlink("../real/target.xml", dir.join("out/scene.xml")).unwrap();
-    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let link = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    std::os::unix::fs::symlink("../real/target.xml", &scene_xml).unwrap();
+    assert_success(&subsurface(&EXPORT, &dir));
+    let link = std::fs::symlink_metadata(&scene_xml).unwrap();
     assert!(link.file_type().is_symlink(), "the link was replaced");
     let xml = std::fs::read_to_string(dir.join("real/target.xml")).unwrap();
     assert!(xml.contains("<scene"), "{xml}");
-    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes"), &dir.join("real")]);
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert_clean_export(&dir, &[&dir.join("real")]);
 }
 
 #[cfg(unix)]
 #[test]
 fn a_link_into_a_missing_directory_fails_and_leaves_nothing() {
-    let dir = tempdir("dangling");
-    std::fs::create_dir_all(dir.join("out")).unwrap();
-    std::os::unix::fs::symlink("../nowhere/target.xml", dir.join("out/scene.xml")).unwrap();
-    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
-    assert_eq!(out.status.code(), Some(1));
+    let (dir, _, out) = export_through_link("dangling", "../nowhere/target.xml");
     let line = error_line(&out);
     assert!(
         line.contains("scene.xml") && line.contains("nowhere") && line.contains("does not exist"),
         "{line}"
     );
     // The meshes were written to temporary files before scene.xml failed.
-    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
     let meshes: Vec<_> = std::fs::read_dir(dir.join("out/meshes")).unwrap().collect();
     assert!(meshes.is_empty(), "{meshes:?}");
     assert!(!dir.join("nowhere").exists());
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert_clean_export(&dir, &[]);
 }
 
 #[test]
 fn an_output_in_a_missing_directory_fails_before_rendering() {
     let dir = tempdir("missing");
     // `render` checks its output before it looks for a GPU, so this needs none.
-    let out = subsurface(&["render", "--out", "nodir/x.png"], &dir);
-    assert_eq!(out.status.code(), Some(1));
-    let line = error_line(&out);
+    let line = error_line(&subsurface(&["render", "--out", "nodir/x.png"], &dir));
     assert!(line.contains("nodir/x.png"), "{line}");
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert!(left.is_empty(), "{left:?}");
@@ -178,9 +183,7 @@ fn an_output_in_a_missing_directory_fails_before_rendering() {
 #[test]
 fn a_fifo_is_written_into() {
     use std::os::unix::fs::FileTypeExt as _;
-    let dir = tempdir("fifo");
-    std::fs::create_dir_all(dir.join("out")).unwrap();
-    let fifo = dir.join("out/scene.xml");
+    let (dir, fifo) = export_dir("fifo");
     mkfifo(&fifo);
     let (tx, rx) = std::sync::mpsc::channel();
     {
@@ -188,29 +191,19 @@ fn a_fifo_is_written_into() {
         // Left blocked (and ended with the test process) if the command never opens the FIFO.
         std::thread::spawn(move || tx.send(std::fs::read(fifo).unwrap()));
     }
-    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&subsurface(&EXPORT, &dir));
     let xml = rx.recv_timeout(Duration::from_secs(60)).unwrap();
     assert!(String::from_utf8_lossy(&xml).contains("<scene"));
     let m = std::fs::symlink_metadata(&fifo).unwrap();
     assert!(m.file_type().is_fifo(), "the FIFO was replaced");
-    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert_clean_export(&dir, &[]);
 }
 
 #[cfg(target_os = "linux")]
 #[test]
 fn a_full_device_fails_with_one_line_and_stays_a_device() {
     use std::os::unix::fs::FileTypeExt as _;
-    let dir = tempdir("full");
-    std::fs::create_dir_all(dir.join("out")).unwrap();
-    std::os::unix::fs::symlink("/dev/full", dir.join("out/scene.xml")).unwrap();
-    let out = subsurface(&["export-mitsuba", "--out", "out"], &dir);
-    assert_eq!(out.status.code(), Some(1));
+    let (dir, scene_xml, out) = export_through_link("full", "/dev/full");
     let line = error_line(&out);
     assert!(
         line.contains("scene.xml: write failed") && line.contains("No space left"),
@@ -218,10 +211,9 @@ fn a_full_device_fails_with_one_line_and_stays_a_device() {
     );
     let m = std::fs::symlink_metadata("/dev/full").unwrap();
     assert!(m.file_type().is_char_device());
-    let link = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    let link = std::fs::symlink_metadata(&scene_xml).unwrap();
     assert!(link.file_type().is_symlink());
-    assert_no_partial_files(&[&dir.join("out"), &dir.join("out/meshes")]);
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert_clean_export(&dir, &[]);
 }
 
 /// A FIFO nobody reads keeps `export-mitsuba` blocked in opening it, with the meshes' temporary
@@ -230,11 +222,10 @@ fn a_full_device_fails_with_one_line_and_stays_a_device() {
 #[test]
 fn ctrl_c_removes_partial_files() {
     use std::os::unix::fs::FileTypeExt as _;
-    let dir = tempdir("sigint");
-    std::fs::create_dir_all(dir.join("out")).unwrap();
-    mkfifo(&dir.join("out/scene.xml"));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_subsurface"))
-        .args(["export-mitsuba", "--out", "out"])
+    let (dir, fifo) = export_dir("sigint");
+    mkfifo(&fifo);
+    let mut child = Command::new(bin())
+        .args(EXPORT)
         .current_dir(&dir)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
@@ -264,32 +255,50 @@ fn ctrl_c_removes_partial_files() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_no_partial_files(&[&dir.join("out"), &meshes]);
-    let m = std::fs::symlink_metadata(dir.join("out/scene.xml")).unwrap();
+    let m = std::fs::symlink_metadata(&fifo).unwrap();
     assert!(m.file_type().is_fifo());
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert_clean_export(&dir, &[]);
 }
 
-/// `render` needs an adapter; without one (and without SUBSURFACE_REQUIRE_GPU=1) this is skipped.
+/// `render --out -`: the PNG alone on stdout, the summary line on stderr. `render` needs an
+/// adapter; without one (and without SUBSURFACE_REQUIRE_GPU=1) this is skipped.
 #[test]
-fn dash_writes_the_png_to_stdout() {
+fn dash_writes_the_png_to_stdout_and_the_summary_to_stderr() {
     let dir = tempdir("stdout");
     let out = subsurface(
         &["render", "--width", "8", "--height", "8", "--out", "-"],
         &dir,
     );
     if !out.status.success() {
-        let require = std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1");
-        assert!(!require, "{}", String::from_utf8_lossy(&out.stderr));
-        eprintln!("skipped, no GPU: {}", String::from_utf8_lossy(&out.stderr));
+        skip(&format!("no GPU adapter: {}", text(&out)));
         return;
     }
+    assert_whole_png(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        out.stdout.starts_with(b"\x89PNG\r\n\x1a\n"),
-        "{:?}",
-        &out.stdout[..out.stdout.len().min(16)]
+        stderr.contains("- 8x8 on ") && stderr.contains("total"),
+        "{stderr}"
     );
     assert!(!dir.join("-").exists());
     assert_no_partial_files(&[&dir]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `profile --plot -` (no GPU): the plot alone on stdout, the text on stderr.
+#[test]
+fn profile_plot_to_stdout_is_the_png_alone() {
+    let dir = tempdir("plot-stdout");
+    let out = subsurface(&["profile", "--material", "marble", "--plot", "-"], &dir);
+    assert_success(&out);
+    assert_whole_png(&out.stdout);
+    let img = image::load_from_memory(&out.stdout).unwrap();
+    assert_eq!((img.width(), img.height()), (1400, 560));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("material: marble") && stderr.contains("plot: -"),
+        "{stderr}"
+    );
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

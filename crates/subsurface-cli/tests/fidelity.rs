@@ -7,24 +7,22 @@
 //!   that its errors stay below the recorded ones (references/fidelity.json) plus a margin,
 //!   and below those of `--sss none --transmittance off`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+use common::tempdir;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// `subsurface`, run from the repository root (where the scenes and references are).
 fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_subsurface"));
+    let mut c = Command::new(common::bin());
     c.current_dir(root());
     c
-}
-
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("subsurface-fidelity-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn env_is_1(k: &str) -> bool {
@@ -77,7 +75,7 @@ fn read_exr_mean(path: &Path) -> (u32, u32, f64, bool) {
 
 #[test]
 fn export_writes_the_medium_in_scene_units() {
-    let out = tmp_dir("export");
+    let out = tempdir("export");
     let o = bin()
         .args([
             "export-mitsuba",
@@ -113,7 +111,7 @@ fn export_loads_in_mitsuba_and_is_not_black() {
         );
         return;
     }
-    let out = tmp_dir("mitsuba");
+    let out = tempdir("mitsuba");
     for scene in ["sphere-frontlit", "wedge-backlit"] {
         let dir = out.join(scene);
         let o = bin()
@@ -203,7 +201,7 @@ fn regression_guard_against_committed_references() {
     if !gpu_available() {
         return;
     }
-    let out = tmp_dir("guard");
+    let out = tempdir("guard");
     let mut checked = 0;
     for (name, rec) in recorded["scenes"].as_object().unwrap() {
         let reference = root().join(format!("references/{name}.exr"));
@@ -280,7 +278,7 @@ fn compare_flip_agrees_with_nv_flip() {
     if !gpu_available() {
         return;
     }
-    let out = tmp_dir("flip");
+    let out = tempdir("flip");
     let png = out.join("side.png");
     let r = compare_json(
         &root().join("references/sphere-frontlit.exr"),
@@ -312,7 +310,7 @@ fn compare_flip_agrees_with_nv_flip() {
 
 #[test]
 fn compare_bad_input_is_one_line_and_leaves_nothing() {
-    let out = tmp_dir("bad");
+    let out = tempdir("bad");
     let png = out.join("x.png");
     let run = |args: &[&str]| {
         let o = bin()

@@ -6,36 +6,19 @@
 //! (`cargo test -p subsurface-cli --bin subsurface view::`); here the binary is checked end
 //! to end.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::Mutex;
+
+use common::{bin, gpu_available, skip, subsurface, tempdir, text};
 
 /// xvfb-run -a picks a free display number racily: one window test at a time.
 static WINDOW: Mutex<()> = Mutex::new(());
 
 const W: &str = "320";
 const H: &str = "240";
-
-fn require_gpu() -> bool {
-    std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1")
-}
-
-fn skip(why: &str) -> bool {
-    assert!(!require_gpu(), "SUBSURFACE_REQUIRE_GPU=1 but {why}");
-    eprintln!("skipped: {why}");
-    false
-}
-
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("subsurface-view-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_subsurface")
-}
 
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")
@@ -60,30 +43,8 @@ fn windowed() -> Option<Command> {
     None
 }
 
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
 fn render(args: &[&str], dir: &Path) -> Output {
-    Command::new(bin())
-        .arg("render")
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
-
-/// Renders the reference first: no adapter means skip (or fail when required).
-fn gpu_available(dir: &Path) -> bool {
-    let out = render(
-        &["--width", "8", "--height", "8", "--out", "probe.png"],
-        dir,
-    );
-    out.status.success() || skip(&format!("no GPU adapter: {}", text(&out)))
+    subsurface(&[&["render"], args].concat(), dir)
 }
 
 fn view(args: &[&str], dir: &Path) -> Option<Output> {
@@ -142,28 +103,42 @@ fn flip_mean(reference: &Path, test: &Path, cols: Option<(u32, u32)>) -> f32 {
 /// order could differ, so the tolerance is tight.
 const TOLERANCE: f32 = 0.01;
 
-#[test]
-fn scripted_view_screenshot_matches_render() {
-    let dir = tempdir("match");
+/// `render` flags for the window's size.
+const SIZE: [&str; 4] = ["--width", W, "--height", H];
+
+/// Runs `subsurface view --frames FRAMES --screenshot view.png ARGS` in a scratch directory
+/// `name` and returns the directory; None when the test is skipped (no GPU adapter, or no
+/// display and no xvfb-run).
+fn screenshot(name: &str, frames: &str, args: &[&str]) -> Option<PathBuf> {
+    let dir = tempdir(name);
     if !gpu_available(&dir) {
-        return;
+        return None;
     }
-    let Some(_) = view(&["--frames", "30", "--screenshot", "view.png"], &dir) else {
-        return;
-    };
-    let out = render(&["--width", W, "--height", H, "--out", "render.png"], &dir);
+    let script = ["--frames", frames, "--screenshot", "view.png"];
+    view(&[&script[..], args].concat(), &dir)?;
+    Some(dir)
+}
+
+/// Runs `render ARGS` into `render.png` in `dir` and asserts that it looks like the view's
+/// screenshot.
+fn assert_render_matches(dir: &Path, args: &[&str]) {
+    let out = render(&[args, &["--out", "render.png"]].concat(), dir);
     assert!(out.status.success(), "{}", text(&out));
     let e = flip_mean(&dir.join("render.png"), &dir.join("view.png"), None);
-    assert!(e <= TOLERANCE, "mean FLIP {e} > {TOLERANCE}");
+    assert!(e <= TOLERANCE, "{args:?}: mean FLIP {e} > {TOLERANCE}");
+}
+
+#[test]
+fn scripted_view_screenshot_matches_render() {
+    let Some(dir) = screenshot("match", "30", &[]) else {
+        return;
+    };
+    assert_render_matches(&dir, &SIZE);
 }
 
 #[test]
 fn saved_scene_renders_like_the_view_and_reads_back() {
-    let dir = tempdir("save");
-    if !gpu_available(&dir) {
-        return;
-    }
-    let settings = [
+    let args = [
         "--sss",
         "gaussian6",
         "--transmittance",
@@ -175,19 +150,12 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
         "--no-follow-surface",
         "--gaussians",
         "1,0,1,1,1",
-    ];
-    let mut args = settings.to_vec();
-    args.extend([
-        "--frames",
-        "3",
-        "--screenshot",
-        "view.png",
         "--save-scene",
         "saved.toml",
-    ]);
-    if view(&args, &dir).is_none() {
+    ];
+    let Some(dir) = screenshot("save", "3", &args) else {
         return;
-    }
+    };
     let saved = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
     assert!(saved.contains("method = \"gaussian6\""), "{saved}");
     // The saved scene is a plain scene file: `render` reproduces the view without flags.
@@ -196,11 +164,7 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
         saved.contains("gaussians = [true, false, true, true, true]"),
         "{saved}"
     );
-    let r = vec!["saved.toml", "--out", "render.png"];
-    let out = render(&r, &dir);
-    assert!(out.status.success(), "{}", text(&out));
-    let e = flip_mean(&dir.join("render.png"), &dir.join("view.png"), None);
-    assert!(e <= TOLERANCE, "mean FLIP {e} > {TOLERANCE}");
+    assert_render_matches(&dir, &["saved.toml"]);
 
     // Opening the saved scene and saving again changes nothing.
     view(
@@ -213,33 +177,17 @@ fn saved_scene_renders_like_the_view_and_reads_back() {
 
 #[test]
 fn split_screen_shows_both_settings() {
-    let dir = tempdir("split");
-    if !gpu_available(&dir) {
+    let Some(dir) = screenshot("split", "3", &["--compare", "none"]) else {
         return;
-    }
-    if view(
-        &[
-            "--compare",
-            "none",
-            "--frames",
-            "3",
-            "--screenshot",
-            "split.png",
-        ],
-        &dir,
-    )
-    .is_none()
-    {
-        return;
-    }
+    };
     for (name, extra) in [("on.png", "separable"), ("off.png", "none")] {
         let out = render(
-            &["--width", W, "--height", H, "--sss", extra, "--out", name],
+            &[&SIZE[..], &["--sss", extra, "--out", name]].concat(),
             &dir,
         );
         assert!(out.status.success(), "{}", text(&out));
     }
-    let split = dir.join("split.png");
+    let split = dir.join("view.png");
     let (on, off) = (dir.join("on.png"), dir.join("off.png"));
     // The divider starts in the middle: SSS on left of it, off right of it.
     assert!(flip_mean(&on, &split, Some((0, 160))) <= TOLERANCE);
@@ -250,28 +198,10 @@ fn split_screen_shows_both_settings() {
 
 #[test]
 fn a_lost_device_is_recreated() {
-    let dir = tempdir("lost");
-    if !gpu_available(&dir) {
+    let Some(dir) = screenshot("lost", "8", &["--lose-device-at", "3"]) else {
         return;
-    }
-    if view(
-        &[
-            "--frames",
-            "8",
-            "--lose-device-at",
-            "3",
-            "--screenshot",
-            "view.png",
-        ],
-        &dir,
-    )
-    .is_none()
-    {
-        return;
-    }
-    let out = render(&["--width", W, "--height", H, "--out", "render.png"], &dir);
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(flip_mean(&dir.join("render.png"), &dir.join("view.png"), None) <= TOLERANCE);
+    };
+    assert_render_matches(&dir, &SIZE);
 }
 
 #[test]
@@ -330,28 +260,14 @@ fn no_display_is_a_one_line_error() {
 /// `render --view` writes.
 #[test]
 fn debug_views_match_render() {
-    let dir = tempdir("views");
-    if !gpu_available(&dir) {
-        return;
-    }
     for (view_name, extra) in [
         ("thickness", &[][..]),
         ("irradiance", &["--sss", "texture"][..]),
     ] {
-        let shot = format!("view-{view_name}.png");
-        let mut args = vec!["--view", view_name, "--frames", "3", "--screenshot", &shot];
-        args.extend(extra);
-        if view(&args, &dir).is_none() {
+        let args = [&["--view", view_name], extra].concat();
+        let Some(dir) = screenshot(&format!("views-{view_name}"), "3", &args) else {
             return;
-        }
-        let png = format!("render-{view_name}.png");
-        let mut r = vec![
-            "--width", W, "--height", H, "--view", view_name, "--out", &png,
-        ];
-        r.extend(extra);
-        let out = render(&r, &dir);
-        assert!(out.status.success(), "{}", text(&out));
-        let e = flip_mean(&dir.join(&png), &dir.join(&shot), None);
-        assert!(e <= TOLERANCE, "{view_name}: mean FLIP {e} > {TOLERANCE}");
+        };
+        assert_render_matches(&dir, &[&SIZE[..], &args].concat());
     }
 }

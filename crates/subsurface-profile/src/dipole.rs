@@ -194,30 +194,14 @@ impl Multipole {
 
     /// Reflectance profile `R(r)` of the slab.
     pub fn reflectance(&self, r_mm: f64) -> [f64; 3] {
-        [0, 1, 2].map(|c| {
-            let ch = self.dipole.channel(c);
-            ch.alpha_prime
-                * self
-                    .poles(&ch)
-                    .map(|(zr, zv)| pole(zr, ch.sigma_tr, r_mm) - pole(zv, ch.sigma_tr, r_mm))
-                    .sum::<f64>()
-        })
+        self.pole_sum(|z, sigma_tr| pole(z, sigma_tr, r_mm))
     }
 
     /// Transmittance profile `T(r)` through the slab (distance `r` measured on
     /// the far face from the point below the entry point).
     pub fn transmittance(&self, r_mm: f64) -> [f64; 3] {
         let d = self.thickness_mm;
-        [0, 1, 2].map(|c| {
-            let ch = self.dipole.channel(c);
-            ch.alpha_prime
-                * self
-                    .poles(&ch)
-                    .map(|(zr, zv)| {
-                        pole(d - zr, ch.sigma_tr, r_mm) - pole(d - zv, ch.sigma_tr, r_mm)
-                    })
-                    .sum::<f64>()
-        })
+        self.pole_sum(|z, sigma_tr| pole(d - z, sigma_tr, r_mm))
     }
 
     /// Total reflectance, in closed form per pole (see [`Dipole`]'s derivation).
@@ -228,28 +212,22 @@ impl Multipole {
     /// Total transmittance, in closed form per pole.
     pub fn total_transmittance(&self) -> [f64; 3] {
         let d = self.thickness_mm;
-        [0, 1, 2].map(|c| {
-            let ch = self.dipole.channel(c);
-            ch.alpha_prime
-                * self
-                    .poles(&ch)
-                    .map(|(zr, zv)| {
-                        pole_energy(d - zr, ch.sigma_tr, f64::INFINITY)
-                            - pole_energy(d - zv, ch.sigma_tr, f64::INFINITY)
-                    })
-                    .sum::<f64>()
-        })
+        self.pole_sum(|z, sigma_tr| pole_energy(d - z, sigma_tr, f64::INFINITY))
     }
 
     fn reflected_energy(&self, rho: f64) -> [f64; 3] {
+        self.pole_sum(|z, sigma_tr| pole_energy(z, sigma_tr, rho))
+    }
+
+    /// Per channel, `alpha' * sum over the pole pairs of (f(z_r) - f(z_v))`, with `f(z,
+    /// sigma_tr)` one pole's contribution at depth `z`.
+    fn pole_sum(&self, f: impl Fn(f64, f64) -> f64) -> [f64; 3] {
         [0, 1, 2].map(|c| {
             let ch = self.dipole.channel(c);
             ch.alpha_prime
                 * self
                     .poles(&ch)
-                    .map(|(zr, zv)| {
-                        pole_energy(zr, ch.sigma_tr, rho) - pole_energy(zv, ch.sigma_tr, rho)
-                    })
+                    .map(|(zr, zv)| f(zr, ch.sigma_tr) - f(zv, ch.sigma_tr))
                     .sum::<f64>()
         })
     }

@@ -53,71 +53,67 @@ pub enum ProfileError {
 
 pub type Result<T, E = ProfileError> = std::result::Result<T, E>;
 
-/// Rejects NaN and infinities.
-pub(crate) fn finite(field: &str, value: f64) -> Result<f64> {
-    if value.is_finite() {
+/// `Ok(value)` where `ok`, else the error `err` builds for `field`.
+fn check<T>(
+    field: &str,
+    value: T,
+    ok: bool,
+    err: impl FnOnce(String) -> ProfileError,
+) -> Result<T> {
+    if ok {
         Ok(value)
     } else {
-        Err(ProfileError::NonFinite {
-            field: field.to_owned(),
-            value,
-        })
+        Err(err(field.to_owned()))
     }
+}
+
+/// Rejects NaN and infinities.
+pub(crate) fn finite(field: &str, value: f64) -> Result<f64> {
+    check(field, value, value.is_finite(), |field| {
+        ProfileError::NonFinite { field, value }
+    })
 }
 
 /// Finite and strictly positive.
 pub(crate) fn positive(field: &str, value: f64) -> Result<f64> {
     finite(field, value)?;
-    if value > 0.0 {
-        Ok(value)
-    } else {
-        Err(ProfileError::NotPositive {
-            field: field.to_owned(),
-            value,
-        })
-    }
+    check(field, value, value > 0.0, |field| {
+        ProfileError::NotPositive { field, value }
+    })
 }
 
 /// Finite and `>= 0`.
 pub(crate) fn non_negative(field: &str, value: f64) -> Result<f64> {
     finite(field, value)?;
-    if value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(ProfileError::Negative {
-            field: field.to_owned(),
-            value,
-        })
-    }
+    check(field, value, value >= 0.0, |field| ProfileError::Negative {
+        field,
+        value,
+    })
 }
 
 /// Finite and inside `min..=max`.
 pub(crate) fn in_range(field: &str, value: f64, min: f64, max: f64) -> Result<f64> {
     finite(field, value)?;
-    if (min..=max).contains(&value) {
-        Ok(value)
-    } else {
-        Err(ProfileError::OutOfRange {
-            field: field.to_owned(),
+    check(field, value, (min..=max).contains(&value), |field| {
+        ProfileError::OutOfRange {
+            field,
             min,
             max,
             value,
-        })
-    }
+        }
+    })
 }
 
 /// `count` inside `min..=max`.
 pub(crate) fn count(field: &str, value: usize, min: usize, max: usize) -> Result<usize> {
-    if (min..=max).contains(&value) {
-        Ok(value)
-    } else {
-        Err(ProfileError::Count {
-            field: field.to_owned(),
+    check(field, value, (min..=max).contains(&value), |field| {
+        ProfileError::Count {
+            field,
             min,
             max,
             value,
-        })
-    }
+        }
+    })
 }
 
 /// Channel suffixes used in field names (`strength.g`).

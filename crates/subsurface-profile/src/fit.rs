@@ -394,36 +394,10 @@ pub(crate) fn nnls(cols: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
             break;
         };
         passive[t] = true;
-        for _inner in 0..3 * n + 10 {
-            let idx: Vec<usize> = (0..n).filter(|&k| passive[k]).collect();
+        active_set_steps(&mut x, &mut passive, |idx| {
             let sub: Vec<&[f64]> = idx.iter().map(|&k| cols[k].as_slice()).collect();
-            let z_sub = least_squares(&sub, b);
-            if z_sub.iter().all(|&z| z > 0.0) {
-                for (&k, &z) in idx.iter().zip(&z_sub) {
-                    x[k] = z;
-                }
-                break;
-            }
-            let mut alpha = 1.0f64;
-            for (&k, &z) in idx.iter().zip(&z_sub) {
-                if z <= 0.0 {
-                    let denom = x[k] - z;
-                    if denom > 0.0 {
-                        alpha = alpha.min(x[k] / denom);
-                    }
-                }
-            }
-            for (&k, &z) in idx.iter().zip(&z_sub) {
-                x[k] += alpha * (z - x[k]);
-                if x[k] <= 1e-15 * (1.0 + x[k].abs()) || (z <= 0.0 && x[k] <= 0.0) {
-                    x[k] = 0.0;
-                    passive[k] = false;
-                }
-            }
-            if !passive.iter().any(|&p| p) {
-                break;
-            }
-        }
+            least_squares(&sub, b)
+        });
         // Guard against the entering variable being dropped straight away.
         if !passive[t] && x[t] == 0.0 {
             let r2 = residual(&x);
@@ -460,37 +434,47 @@ fn nnls_gram(gram: &[Vec<f64>], atb: &[f64]) -> Vec<f64> {
             break;
         };
         passive[t] = true;
-        for _inner in 0..3 * n + 10 {
-            let idx: Vec<usize> = (0..n).filter(|&k| passive[k]).collect();
-            let z_sub = cholesky_solve(gram, atb, &idx);
-            if z_sub.iter().all(|&z| z > 0.0) {
-                for (&k, &z) in idx.iter().zip(&z_sub) {
-                    x[k] = z;
-                }
-                break;
-            }
-            let mut alpha = 1.0f64;
-            for (&k, &z) in idx.iter().zip(&z_sub) {
-                if z <= 0.0 && x[k] - z > 0.0 {
-                    alpha = alpha.min(x[k] / (x[k] - z));
-                }
-            }
-            for (&k, &z) in idx.iter().zip(&z_sub) {
-                x[k] += alpha * (z - x[k]);
-                if x[k] <= 1e-15 * (1.0 + x[k].abs()) {
-                    x[k] = 0.0;
-                    passive[k] = false;
-                }
-            }
-            if !passive.iter().any(|&p| p) {
-                break;
-            }
-        }
+        active_set_steps(&mut x, &mut passive, |idx| cholesky_solve(gram, atb, idx));
         if !passive[t] {
             break;
         }
     }
     x
+}
+
+/// The inner loop of Lawson and Hanson's active-set method, shared by [`nnls`] and
+/// [`nnls_gram`]: `solve` gives the unconstrained least-squares solution over the passive
+/// set `idx`; where it is all positive it is taken, else `x` moves towards it as far as
+/// feasibility allows and the unknowns that reach (about) zero leave the passive set.
+fn active_set_steps(x: &mut [f64], passive: &mut [bool], solve: impl Fn(&[usize]) -> Vec<f64>) {
+    let n = x.len();
+    for _inner in 0..3 * n + 10 {
+        let idx: Vec<usize> = (0..n).filter(|&k| passive[k]).collect();
+        let z_sub = solve(&idx);
+        if z_sub.iter().all(|&z| z > 0.0) {
+            for (&k, &z) in idx.iter().zip(&z_sub) {
+                x[k] = z;
+            }
+            break;
+        }
+        let mut alpha = 1.0f64;
+        for (&k, &z) in idx.iter().zip(&z_sub) {
+            if z <= 0.0 && x[k] - z > 0.0 {
+                alpha = alpha.min(x[k] / (x[k] - z));
+            }
+        }
+        for (&k, &z) in idx.iter().zip(&z_sub) {
+            x[k] += alpha * (z - x[k]);
+            // Also catches x[k] <= 0 (the right-hand side is positive).
+            if x[k] <= 1e-15 * (1.0 + x[k].abs()) {
+                x[k] = 0.0;
+                passive[k] = false;
+            }
+        }
+        if !passive.iter().any(|&p| p) {
+            break;
+        }
+    }
 }
 
 /// Solves `gram[idx][idx] z = atb[idx]` by Cholesky; a non-positive pivot

@@ -227,10 +227,32 @@ pub(crate) fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
     s * h / 3.0
 }
 
+/// d'Eon's skin profile with every variance times `factor` (every radius times its square
+/// root), the weights unchanged: a wider material for tests.
+#[cfg(test)]
+pub(crate) fn widened_skin(factor: f64) -> SumOfGaussians {
+    SumOfGaussians::new(
+        SumOfGaussians::skin()
+            .terms()
+            .iter()
+            .map(|t| GaussianTerm {
+                variance: t.variance * factor,
+                weight: t.weight,
+            })
+            .collect(),
+    )
+    .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    /// A profile of a single Gaussian term.
+    fn one_term(variance: f64, weight: [f64; 3]) -> Result<SumOfGaussians> {
+        SumOfGaussians::new(vec![GaussianTerm { variance, weight }])
+    }
 
     #[test]
     fn gaussians_integrate_to_one_over_the_plane() {
@@ -284,20 +306,12 @@ mod tests {
 
     #[test]
     fn bad_terms_are_rejected_with_field_names() {
-        let e = SumOfGaussians::new(vec![GaussianTerm {
-            variance: 0.0,
-            weight: [1.0; 3],
-        }])
-        .unwrap_err();
+        let e = one_term(0.0, [1.0; 3]).unwrap_err();
         assert!(
             e.to_string()
                 .starts_with("gaussians[0].variance: must be > 0")
         );
-        let e = SumOfGaussians::new(vec![GaussianTerm {
-            variance: 1.0,
-            weight: [1.0, f64::NAN, 1.0],
-        }])
-        .unwrap_err();
+        let e = one_term(1.0, [1.0, f64::NAN, 1.0]).unwrap_err();
         assert!(
             e.to_string()
                 .starts_with("gaussians[0].weight.g: must be finite")
@@ -307,11 +321,7 @@ mod tests {
 
     #[test]
     fn energy_radius_matches_single_gaussian_closed_form() {
-        let p = SumOfGaussians::new(vec![GaussianTerm {
-            variance: 2.0,
-            weight: [1.0; 3],
-        }])
-        .unwrap();
+        let p = one_term(2.0, [1.0; 3]).unwrap();
         // 1 - exp(-r^2 / 2v) = 0.999  =>  r = sqrt(2 v ln 1000)
         let expect = (2.0 * 2.0 * 1000f64.ln()).sqrt();
         assert!((p.energy_radius_mm(0.999) - expect).abs() < 1e-9);

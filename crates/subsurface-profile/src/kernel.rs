@@ -350,17 +350,7 @@ mod tests {
 
     #[test]
     fn a_wider_profile_spreads_hable_taps_further_and_keeps_unit_sums() {
-        let wide = SumOfGaussians::new(
-            SumOfGaussians::skin()
-                .terms()
-                .iter()
-                .map(|t| crate::GaussianTerm {
-                    variance: t.variance * 4.0,
-                    weight: t.weight,
-                })
-                .collect(),
-        )
-        .unwrap();
+        let wide = crate::gaussian::widened_skin(4.0);
         let k = hable13_for(&wide).unwrap();
         let skin = hable13_kernel();
         // Scaling the profile by 2 scales the taps by 2 and leaves the weights.

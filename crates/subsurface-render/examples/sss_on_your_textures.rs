@@ -15,6 +15,7 @@ use std::path::PathBuf;
 
 use subsurface_profile::{KernelParams, ScreenKernels};
 use subsurface_render::passes::sss::{self, SssInputs, SssPass};
+use subsurface_render::passes::{fullscreen, util};
 use subsurface_render::{GpuContext, RenderError, SssMethod, SssSettings, readback};
 
 const WIDTH: u32 = 640;
@@ -37,12 +38,6 @@ struct Targets {
     @location(1) depth: f32,         // linear view depth in scene units
     @location(2) sss: vec4<f32>,     // SSS strength, scene units per millimetre, profile row
 };
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.0, 1.0);
-}
 
 // Distance along the ray (origin o, unit direction d) to a sphere, or -1 on a miss.
 fn hit_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> f32 {
@@ -123,22 +118,17 @@ fn main() -> Result<(), Box<dyn Error>> {
     // The application's own targets. The diffuse texture is the one SssPass blurs in place,
     // so it needs TEXTURE_BINDING and RENDER_ATTACHMENT (and COPY_SRC for some methods).
     let target = |label, format| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: WIDTH,
-                height: HEIGHT,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        util::texture_2d(
+            device,
+            label,
+            WIDTH,
+            HEIGHT,
+            1,
             format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
+        )
     };
     let diffuse = target("diffuse", sss::FORMAT); // Rgba16Float
     let depth = target("linear depth", wgpu::TextureFormat::R32Float);
@@ -150,56 +140,31 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (diffuse_view, depth_view, sss_view) = (view(&diffuse), view(&depth), view(&sss_params));
 
     // Our own pipeline: a full-screen triangle whose fragment shader ray-casts the scene. The
-    // image size and field of view are baked in as WGSL constants to avoid a uniform buffer.
+    // image size and field of view are baked in as WGSL constants to avoid a uniform buffer;
+    // the library's `vs_fullscreen` draws the triangle.
     let tan_half_fov = (0.5 * FOV_Y_DEG.to_radians()).tan();
     let source = format!(
         "const SIZE = vec2<f32>({WIDTH}.0, {HEIGHT}.0);\n\
-         const TAN_HALF_FOV: f32 = {tan_half_fov:?};\n{SCENE_WGSL}"
+         const TAN_HALF_FOV: f32 = {tan_half_fov:?};\n{}{SCENE_WGSL}",
+        fullscreen::VERTEX_WGSL
     );
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("skin ball"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("skin ball"),
-        layout: None, // no bindings: the derived layout is empty
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: None,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[
-                Some(diffuse.format().into()),
-                Some(depth.format().into()),
-                Some(sss_params.format().into()),
-            ],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let module = util::wgsl_module(device, "skin ball", &source);
+    let pipeline = fullscreen::pipeline(
+        device,
+        &module,
+        None, // no bindings: the derived layout is empty
+        "fs_main",
+        &[
+            Some(diffuse.format().into()),
+            Some(depth.format().into()),
+            Some(sss_params.format().into()),
+        ],
+    );
 
     let mut encoder = device.create_command_encoder(&Default::default());
     {
         // The triangle writes every pixel; Clear only says the old contents are not needed.
-        let attach = |v| {
-            Some(wgpu::RenderPassColorAttachment {
-                view: v,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        };
+        let attach = |v| util::color_attachment(v, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("skin ball"),
             color_attachments: &[
@@ -234,14 +199,14 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (after, _) = readback::read_float(&ctx, &diffuse)?;
 
     // Only skin (strength > 0) may change: the background must come back bit for bit.
-    let (strength, _) = readback::read_float(&ctx, &sss_params)?;
+    let (strength, channels) = readback::read_float(&ctx, &sss_params)?;
     let change = |i: usize| -> f32 {
         (0..3)
             .map(|c| (after[4 * i + c] - before[4 * i + c]).abs())
             .sum()
     };
     let (skin, background): (Vec<usize>, Vec<usize>) =
-        (0..strength.len() / 2).partition(|&i| strength[2 * i] > 0.0);
+        (0..strength.len() / channels).partition(|&i| strength[channels * i] > 0.0);
     let skin_mean = skin.iter().map(|&i| change(i)).sum::<f32>() / (3 * skin.len()) as f32;
     let background_max = background.iter().map(|&i| change(i)).fold(0.0, f32::max);
     println!(

@@ -3,9 +3,8 @@
 //! rather than an out-of-memory abort halfway through.
 
 use crate::error::RenderError;
-use crate::renderer::RenderOptions;
 use crate::scene::Scene;
-use crate::settings::{SssMethod, TransmittanceMethod};
+use crate::settings::{RenderSettings, SssMethod, TransmittanceMethod};
 
 /// Default limit on the estimate, in bytes; `SUBSURFACE_GPU_MEMORY_LIMIT_GB` overrides it.
 pub const DEFAULT_LIMIT_BYTES: u64 = 8 << 30;
@@ -34,9 +33,8 @@ fn gib(bytes: u64) -> String {
 
 /// The largest allocations of a frame, each checked against the limit, with the setting that
 /// drives it named in the error.
-pub fn check(scene: &Scene, options: &RenderOptions) -> Result<(), RenderError> {
+pub fn check(scene: &Scene, s: &RenderSettings) -> Result<(), RenderError> {
     let limit = limit_bytes();
-    let s = &options.settings;
     let pixels = s.width as u64 * s.height as u64;
     let frame = pixels * FRAME_BYTES_PER_PIXEL;
     let over = |field: &str, what: String, bytes: u64| {
@@ -104,21 +102,21 @@ mod tests {
     #[test]
     fn sizes_past_the_limit_are_errors_naming_the_setting() {
         let scene = Scene::default_scene();
-        let mut o = RenderOptions::from_scene(&scene);
+        let mut o = scene.desc.render.clone();
         assert!(check(&scene, &o).is_ok());
-        (o.settings.width, o.settings.height) = (16384, 16384);
+        (o.width, o.height) = (16384, 16384);
         let e = check(&scene, &o).unwrap_err().to_string();
         assert!(
             e.starts_with("width: a 16384x16384 frame needs about"),
             "{e}"
         );
         assert!(!e.contains('\n'));
-        let mut o = RenderOptions::from_scene(&scene);
-        o.settings.sss.method = SssMethod::Texture;
-        o.settings.sss.texture_size = 16384;
+        let mut o = scene.desc.render.clone();
+        o.sss.method = SssMethod::Texture;
+        o.sss.texture_size = 16384;
         let e = check(&scene, &o).unwrap_err().to_string();
         assert!(e.starts_with("sss.texture_size: texture-space maps"), "{e}");
-        o.settings.sss.texture_size = 1024;
+        o.sss.texture_size = 1024;
         assert!(check(&scene, &o).is_ok());
     }
 }

@@ -198,7 +198,7 @@ impl Renderer {
         options: RenderOptions,
     ) -> Result<Self, RenderError> {
         check_options(ctx, &options)?;
-        crate::budget::check(scene, &options)?;
+        crate::budget::check(scene, &options.settings)?;
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
         let profiles = profile_table(scene, &options)?;
@@ -287,7 +287,7 @@ impl Renderer {
     /// meshes as at creation (same count, same order); otherwise create a new `Renderer`.
     pub fn update(&mut self, scene: &Scene, options: &RenderOptions) -> Result<(), RenderError> {
         check_options(&self.ctx, options)?;
-        crate::budget::check(scene, options)?;
+        crate::budget::check(scene, &options.settings)?;
         let device = self.ctx.device.clone();
         let queue = self.ctx.queue.clone();
         let names: Vec<String> = scene

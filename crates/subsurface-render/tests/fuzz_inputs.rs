@@ -6,28 +6,17 @@
 //! In `cargo test` a fixed replay runs; `SUBSURFACE_FUZZ_SECONDS=N` (tools/fuzz.sh) runs
 //! fresh mutants for N seconds per target and reports the executions.
 
+mod common;
+
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use common::{Rng, repo_root};
 use subsurface_render::Scene;
 use subsurface_render::scene::{MeshDesc, SceneDesc, load_image};
 
 const TIME_LIMIT: Duration = Duration::from_secs(5);
-
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 /// The fixed replay's count, or a time budget and a fresh seed from the environment.
 fn plan(replay: usize) -> (usize, Option<Duration>, u64) {
@@ -48,10 +37,6 @@ fn plan(replay: usize) -> (usize, Option<Duration>, u64) {
         }
         None => (replay, None, 0x51ed_270b_9a3c_44e1),
     }
-}
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Values on the validator's edges: zero, negatives, overflow, denormals, non-numbers, limits.
@@ -170,60 +155,100 @@ fn one_line_naming(e: &str, file: &str) -> bool {
     e.starts_with(file) && !e.contains('\n')
 }
 
-#[test]
-fn scene_files_never_panic_and_errors_are_one_line() {
-    let (count, budget, seed) = plan(3000);
-    let seeds = scene_seeds();
+/// What a run of mutants did.
+struct Outcome<T> {
+    /// What each accepted mutant gave.
+    accepted: Vec<T>,
+    rejected: usize,
+    failures: Vec<String>,
+    elapsed: Duration,
+}
+
+/// Feeds `plan`'s count of mutants (fewer when its budget runs out) to `run`: mutant `i`,
+/// "{seed name}#{i}" in reports, is `mutate` of seed `i` (in turn) with an [`Rng`] started
+/// at `plan`'s seed; `file(i, seed name, mutant)` puts it where `run(file, mutant)` reads it
+/// and gives the name its errors must start with. A panic, a run longer than [`TIME_LIMIT`]
+/// or an error that is not one line naming the file is a failure; its mutant is saved to
+/// `keep(i, seed name)`.
+fn run_mutants<S, D: AsRef<[u8]>, T, E: std::fmt::Display>(
+    (count, budget, seed): (usize, Option<Duration>, u64),
+    seeds: &[(String, S)],
+    mutate: impl Fn(&mut Rng, &S) -> D,
+    file: impl Fn(usize, &str, &D) -> String,
+    run: impl Fn(&str, &D) -> Result<T, E>,
+    keep: impl Fn(usize, &str) -> PathBuf,
+) -> Outcome<T> {
     let mut rng = Rng(seed);
     let start = Instant::now();
-    let (mut ok, mut rejected, mut loaded) = (0usize, 0usize, 0usize);
-    let mut failures = Vec::new();
+    let (mut accepted, mut rejected, mut failures) = (Vec::new(), 0, Vec::new());
     for i in 0..count {
         if budget.is_some_and(|b| start.elapsed() > b) {
             break;
         }
-        let (seed_name, seed_text) = &seeds[i % seeds.len()];
-        let text = mutate_text(&mut rng, seed_text);
-        let name = format!("{seed_name}#{i}");
+        let (seed_name, seed_content) = &seeds[i % seeds.len()];
+        let mutant = mutate(&mut rng, seed_content);
+        let file = file(i, seed_name, &mutant);
         let t0 = Instant::now();
-        let r = catch_unwind(AssertUnwindSafe(|| {
-            let desc = SceneDesc::from_toml_str(&text, &name)?;
-            if self_contained(&desc) {
-                Scene::from_desc(desc, Path::new("."), &name).map(|_| true)
-            } else {
-                Ok(false)
-            }
-        }));
+        let r = catch_unwind(AssertUnwindSafe(|| run(&file, &mutant)));
         let problem = match r {
             Err(_) => Some("panicked".to_string()),
             Ok(_) if t0.elapsed() > TIME_LIMIT => Some(format!("took {:?}", t0.elapsed())),
             Ok(Err(e)) => {
                 rejected += 1;
                 let e = e.to_string();
-                (!one_line_naming(&e, &name)).then(|| format!("bad message {e:?}"))
+                (!one_line_naming(&e, &file)).then(|| format!("bad message {e:?}"))
             }
-            Ok(Ok(l)) => {
-                ok += 1;
-                loaded += l as usize;
+            Ok(Ok(v)) => {
+                accepted.push(v);
                 None
             }
         };
         if let Some(p) = problem {
-            let file = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("scene_fuzz_{i}.toml"));
-            let _ = std::fs::write(&file, &text);
-            failures.push(format!("{name}: {p} (saved to {})", file.display()));
+            let saved = keep(i, seed_name);
+            let _ = std::fs::write(&saved, mutant.as_ref());
+            failures.push(format!(
+                "{seed_name}#{i}: {p} (saved to {})",
+                saved.display()
+            ));
         }
     }
+    Outcome {
+        accepted,
+        rejected,
+        failures,
+        elapsed: start.elapsed(),
+    }
+}
+
+#[test]
+fn scene_files_never_panic_and_errors_are_one_line() {
+    let out = run_mutants(
+        plan(3000),
+        &scene_seeds(),
+        |rng, text| mutate_text(rng, text),
+        |i, seed_name, _| format!("{seed_name}#{i}"),
+        |name, text| {
+            let desc = SceneDesc::from_toml_str(text, name)?;
+            if self_contained(&desc) {
+                Scene::from_desc(desc, Path::new("."), name).map(|_| true)
+            } else {
+                Ok(false)
+            }
+        },
+        |i, _| Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("scene_fuzz_{i}.toml")),
+    );
+    let (ok, rejected) = (out.accepted.len(), out.rejected);
+    let loaded = out.accepted.iter().filter(|&&l| l).count();
     eprintln!(
         "scene files: {} executions ({ok} valid, {loaded} loaded, {rejected} rejected) in {:?}",
         ok + rejected,
-        start.elapsed()
+        out.elapsed
     );
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(out.failures.is_empty(), "{}", out.failures.join("\n"));
     assert!(ok > 50 && rejected > 500, "{ok} valid, {rejected} rejected");
 }
 
-fn image_seeds() -> Vec<(&'static str, Vec<u8>)> {
+fn image_seeds() -> Vec<(String, Vec<u8>)> {
     let img = image::RgbaImage::from_fn(16, 12, |x, y| {
         image::Rgba([(x * 16) as u8, (y * 20) as u8, ((x + y) * 7) as u8, 255])
     });
@@ -244,11 +269,13 @@ fn image_seeds() -> Vec<(&'static str, Vec<u8>)> {
             .unwrap();
         bytes
     };
-    vec![
-        ("seed.png", encode(image::ImageFormat::Png)),
-        ("seed.jpg", encode(image::ImageFormat::Jpeg)),
-        ("seed.exr", encode(image::ImageFormat::OpenExr)),
+    [
+        ("seed.png", image::ImageFormat::Png),
+        ("seed.jpg", image::ImageFormat::Jpeg),
+        ("seed.exr", image::ImageFormat::OpenExr),
     ]
+    .map(|(name, format)| (name.to_string(), encode(format)))
+    .into()
 }
 
 fn mutate_bytes(rng: &mut Rng, seed: &[u8]) -> Vec<u8> {
@@ -283,7 +310,6 @@ fn mutate_bytes(rng: &mut Rng, seed: &[u8]) -> Vec<u8> {
 
 #[test]
 fn images_never_panic_and_errors_are_one_line() {
-    let (count, budget, seed) = plan(1500);
     let seeds = image_seeds();
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("image_fuzz");
     std::fs::create_dir_all(&dir).unwrap();
@@ -292,49 +318,25 @@ fn images_never_panic_and_errors_are_one_line() {
         std::fs::write(&p, bytes).unwrap();
         load_image(&p).unwrap_or_else(|e| panic!("seed {name}: {e}"));
     }
-    let mut rng = Rng(seed);
-    let start = Instant::now();
-    let (mut ok, mut rejected) = (0usize, 0usize);
-    let mut failures = Vec::new();
-    for i in 0..count {
-        if budget.is_some_and(|b| start.elapsed() > b) {
-            break;
-        }
-        let (seed_name, seed_bytes) = &seeds[i % seeds.len()];
-        let bytes = mutate_bytes(&mut rng, seed_bytes);
-        let path = dir.join(format!("m{}_{seed_name}", i % 64));
-        std::fs::write(&path, &bytes).unwrap();
-        let t0 = Instant::now();
-        let r = catch_unwind(|| load_image(&path));
-        let file = path.display().to_string();
-        let problem = match r {
-            Err(_) => Some("panicked".to_string()),
-            Ok(_) if t0.elapsed() > TIME_LIMIT => Some(format!("took {:?}", t0.elapsed())),
-            Ok(Err(e)) => {
-                rejected += 1;
-                let e = e.to_string();
-                (!one_line_naming(&e, &file)).then(|| format!("bad message {e:?}"))
-            }
-            Ok(Ok(_)) => {
-                ok += 1;
-                None
-            }
-        };
-        if let Some(p) = problem {
-            let keep = dir.join(format!("failure_{i}_{seed_name}"));
-            let _ = std::fs::write(&keep, &bytes);
-            failures.push(format!(
-                "{seed_name}#{i}: {p} (saved to {})",
-                keep.display()
-            ));
-        }
-    }
+    let out = run_mutants(
+        plan(1500),
+        &seeds,
+        |rng, bytes| mutate_bytes(rng, bytes),
+        |i, seed_name, bytes| {
+            let path = dir.join(format!("m{}_{seed_name}", i % 64));
+            std::fs::write(&path, bytes).unwrap();
+            path.display().to_string()
+        },
+        |path, _| load_image(Path::new(path)).map(|_| ()),
+        |i, seed_name| dir.join(format!("failure_{i}_{seed_name}")),
+    );
+    let (ok, rejected) = (out.accepted.len(), out.rejected);
     eprintln!(
         "images: {} executions ({ok} decoded, {rejected} rejected) in {:?}",
         ok + rejected,
-        start.elapsed()
+        out.elapsed
     );
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(out.failures.is_empty(), "{}", out.failures.join("\n"));
     assert!(
         ok > 20 && rejected > 100,
         "{ok} decoded, {rejected} rejected"

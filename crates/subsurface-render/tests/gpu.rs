@@ -3,15 +3,8 @@
 
 mod common;
 
-use common::{context, masked_mean, scene};
-use subsurface_render::{RenderOptions, Renderer, Scene, SssMethod};
-
-/// The scene's own settings at this size.
-fn options(scene: &Scene, w: u32, h: u32) -> RenderOptions {
-    let mut o = RenderOptions::from_scene(scene);
-    (o.settings.width, o.settings.height) = (w, h);
-    o
-}
+use common::{camera_toml, context, dark_scene, light_toml, masked_mean, options, scene};
+use subsurface_render::{Renderer, SssMethod};
 
 fn luminance(c: [f32; 4]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
@@ -20,19 +13,10 @@ fn luminance(c: [f32; 4]) -> f32 {
 #[test]
 fn lit_sphere_is_brighter_on_the_lit_side() {
     let Some(ctx) = context() else { return };
-    let s = scene(
+    let s = dark_scene(
+        &camera_toml(3.0, 30.0, ""),
+        &light_toml("directional", [5.0, 0.0, 0.0], 2.0, ""),
         r#"
-        [camera]
-        position = [0.0, 0.0, 3.0]
-        target = [0.0, 0.0, 0.0]
-        fov_y_deg = 30.0
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        [[lights]]
-        kind = "directional"
-        position = [5.0, 0.0, 0.0]
-        target = [0.0, 0.0, 0.0]
-        intensity = 2.0
         [[objects]]
         mesh = { shape = "sphere", radius = 0.5 }
         "#,
@@ -70,28 +54,20 @@ fn shadow_caster_darkens_the_receiver() {
             } else {
                 ""
             };
-            let s = scene(&format!(
+            let light = light_toml(
+                kind,
+                [0.5, 0.5, 3.0],
+                if kind == "directional" { 1.0 } else { 9.0 },
+                "outer_angle_deg = 40.0\ninner_angle_deg = 30.0\nshadow_map_size = 256",
+            );
+            let objects = format!(
                 r#"
-                [camera]
-                position = [0.0, 0.0, 4.0]
-                target = [0.0, 0.0, 0.0]
-                fov_y_deg = 40.0
-                [render]
-                ambient = [0.0, 0.0, 0.0]
-                [[lights]]
-                kind = "{kind}"
-                position = [0.5, 0.5, 3.0]
-                target = [0.0, 0.0, 0.0]
-                intensity = {}
-                outer_angle_deg = 40.0
-                inner_angle_deg = 30.0
-                shadow_map_size = 256
                 [[objects]]
                 mesh = {{ shape = "slab", width = 3.0, height = 3.0, thickness = 0.05 }}
                 {caster}
-                "#,
-                if kind == "directional" { 1.0 } else { 9.0 }
-            ));
+                "#
+            );
+            let s = dark_scene(&camera_toml(4.0, 40.0, ""), &light, &objects);
             let (w, h) = (64, 64);
             let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
             r.render().unwrap();
@@ -113,20 +89,17 @@ fn shadow_caster_darkens_the_receiver() {
 #[test]
 fn linear_depth_matches_camera_distance() {
     let Some(ctx) = context() else { return };
-    let s = scene(
+    // The point light's target and intensity are the defaults: it has no direction.
+    let s = scene(&format!(
         r#"
-        [camera]
-        position = [0.0, 0.0, 2.0]
-        target = [0.0, 0.0, 0.0]
-        fov_y_deg = 40.0
-        far = 50.0
-        [[lights]]
-        kind = "point"
-        position = [0.0, 0.0, 1.0]
+        {camera}
+        {light}
         [[objects]]
-        mesh = { shape = "slab", width = 1.0, height = 1.0, thickness = 0.1 }
+        mesh = {{ shape = "slab", width = 1.0, height = 1.0, thickness = 0.1 }}
         "#,
-    );
+        camera = camera_toml(2.0, 40.0, "far = 50.0"),
+        light = light_toml("point", [0.0, 0.0, 1.0], 1.0, ""),
+    ));
     let (w, h) = (64, 48);
     let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
     r.render().unwrap();

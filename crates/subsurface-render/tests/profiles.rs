@@ -5,7 +5,7 @@
 mod common;
 mod sss_util;
 
-use common::{context, scene};
+use common::{camera_toml, context, light_toml, scene};
 use sss_util::*;
 use subsurface_profile::oracle::{self, ScreenInput};
 use subsurface_render::{RenderOptions, Renderer, SssMethod, SssSettings};
@@ -81,41 +81,39 @@ fn no_kernel_mixes_across_a_material_boundary() {
 
 /// Skin, marble and ketchup slabs side by side in one frame, lit with a hard shadow edge
 /// across all three so each has something to blur.
-const THREE_SLABS: &str = r#"
-[camera]
-position = [0.0, 0.0, 0.25]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.05
-far = 2.0
+fn three_slabs() -> String {
+    let light = light_toml(
+        "spot",
+        [0.02, 0.1, 0.3],
+        0.02,
+        "inner_angle_deg = 10.0\nouter_angle_deg = 12.0\nshadow_map_size = 512\nshadow_bias = 0.0002",
+    );
+    format!(
+        r#"
+{camera}
 [render]
 width = 192
 height = 96
 ambient = [0.02, 0.02, 0.02]
-[[lights]]
-kind = "spot"
-position = [0.02, 0.1, 0.3]
-target = [0.0, 0.0, 0.0]
-intensity = 0.02
-inner_angle_deg = 10.0
-outer_angle_deg = 12.0
-shadow_map_size = 512
-shadow_bias = 0.0002
+{light}
 [[objects]]
 name = "skin"
-mesh = { shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }
+mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
 translation = [-0.045, 0.0, 0.0]
-material = { albedo = [0.75, 0.5, 0.4], profile = "skin" }
+material = {{ albedo = [0.75, 0.5, 0.4], profile = "skin" }}
 [[objects]]
 name = "marble"
-mesh = { shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }
-material = { albedo = [0.83, 0.79, 0.75], profile = "marble" }
+mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
+material = {{ albedo = [0.83, 0.79, 0.75], profile = "marble" }}
 [[objects]]
 name = "ketchup"
-mesh = { shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }
+mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
 translation = [0.045, 0.0, 0.0]
-material = { albedo = [0.16, 0.01, 0.0], profile = "ketchup" }
-"#;
+material = {{ albedo = [0.16, 0.01, 0.0], profile = "ketchup" }}
+"#,
+        camera = camera_toml(0.25, 30.0, "near = 0.05\nfar = 2.0"),
+    )
+}
 
 /// The whole renderer, three materials in one frame: the lighting pass writes each pixel's
 /// profile row, and every pixel of the blurred image equals the oracle run with the
@@ -124,7 +122,7 @@ material = { albedo = [0.16, 0.01, 0.0], profile = "ketchup" }
 #[test]
 fn renderer_blurs_skin_marble_and_ketchup_each_with_its_own_profile() {
     let Some(ctx) = context() else { return };
-    let s = scene(THREE_SLABS);
+    let s = scene(&three_slabs());
     let render = |method| {
         let mut opts = RenderOptions::from_scene(&s);
         opts.settings.sss.method = method;

@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::{assets_dir, context, flip_against_reference, repo_root};
+use common::{context, flip_against_reference, head_scene, options};
 use subsurface_render::SssMethod;
 use subsurface_render::TransmittanceMethod;
-use subsurface_render::{RenderOptions, Renderer, Scene};
+use subsurface_render::{Renderer, Scene};
 
 /// FLIP mean and 95th-percentile limits: lavapipe against its own references differs only by
 /// nondeterminism-free arithmetic, so these leave room for other drivers' rounding only.
@@ -24,9 +24,7 @@ const METHODS: [SssMethod; 4] = [
 fn check(name: &str, scene: &Scene) {
     let Some(ctx) = context() else { return };
     for method in METHODS {
-        let mut opts = RenderOptions::from_scene(scene);
-        opts.settings.width = 256;
-        opts.settings.height = 256;
+        let mut opts = options(scene, 256, 256);
         opts.settings.sss.method = method;
         let mut r = Renderer::new(&ctx, scene, opts).unwrap();
         let img = r.render().unwrap().image;
@@ -38,9 +36,7 @@ fn check(name: &str, scene: &Scene) {
         );
     }
     // Transmittance off, for the record of what it adds.
-    let mut opts = RenderOptions::from_scene(scene);
-    opts.settings.width = 256;
-    opts.settings.height = 256;
+    let mut opts = options(scene, 256, 256);
     opts.settings.transmittance.method = TransmittanceMethod::Off;
     let img = Renderer::new(&ctx, scene, opts)
         .unwrap()
@@ -58,19 +54,6 @@ fn check(name: &str, scene: &Scene) {
 #[test]
 fn hand_matches_references() {
     check("hand", &Scene::default_scene());
-}
-
-/// scenes/head.toml, reading the head from SUBSURFACE_ASSETS.
-pub fn head_scene() -> Option<Scene> {
-    let assets = assets_dir()?;
-    // scenes/head.toml points at ../../shared/assets; tests honour SUBSURFACE_ASSETS instead.
-    let path = repo_root().join("scenes/head.toml");
-    let text = std::fs::read_to_string(&path)
-        .unwrap()
-        .replace("../../shared/assets", &assets.to_string_lossy());
-    let desc =
-        subsurface_render::scene::SceneDesc::from_toml_str(&text, "scenes/head.toml").unwrap();
-    Some(Scene::from_desc(desc, &repo_root().join("scenes"), "scenes/head.toml").unwrap())
 }
 
 #[test]

@@ -14,12 +14,31 @@ use subsurface_render::{
     DebugView, GpuContext, RenderOptions, RenderSettings, Renderer, SssMethod, SssSettings,
 };
 
-
 // Stated tolerances: max absolute difference for colours in 0.05..0.35 stored as Rgba16Float
 // (the GPU keeps intermediates in f16, the oracle in f32; f16's step is 2.4e-4 there).
 const TOL_SEPARABLE: f32 = 1e-3;
 const TOL_GAUSSIAN6: f32 = 1e-3;
 const TOL_HABLE13: f32 = 1e-3;
+
+/// The pass run with `config` on `input` on the GPU is within `tol` of the oracle's `cpu`
+/// everywhere, and blurs.
+fn assert_blurs_as_oracle(
+    ctx: &GpuContext,
+    input: &ScreenInput,
+    config: &SssSettings,
+    cpu: &[[f32; 3]],
+    tol: f32,
+    name: &str,
+) {
+    let gpu = run_gpu(ctx, input, config);
+    let d = max_abs_diff(&gpu, cpu);
+    eprintln!("{name}: max |GPU - oracle| = {d:.2e}");
+    assert!(d < tol, "{name}: {d}");
+    assert!(
+        max_abs_diff(&gpu, &input.color) > 0.01,
+        "{name} did not blur"
+    );
+}
 
 #[test]
 fn separable_matches_oracle() {
@@ -31,15 +50,9 @@ fn separable_matches_oracle() {
             samples,
             ..Default::default()
         };
-        let gpu = run_gpu(&ctx, &input, &config);
         let cpu = oracle::separable(&input, &skin(samples), &params(&config)).unwrap();
-        let d = max_abs_diff(&gpu, &cpu);
-        eprintln!("separable N={samples}: max |GPU - oracle| = {d:.2e}");
-        assert!(d < TOL_SEPARABLE, "separable N={samples}: {d}");
-        assert!(
-            max_abs_diff(&gpu, &input.color) > 0.01,
-            "separable N={samples} did not blur"
-        );
+        let name = format!("separable N={samples}");
+        assert_blurs_as_oracle(&ctx, &input, &config, &cpu, TOL_SEPARABLE, &name);
     }
 }
 
@@ -48,7 +61,6 @@ fn gaussian6_matches_oracle() {
     let Some(ctx) = context() else { return };
     let input = test_card();
     let config = settings(SssMethod::Gaussian6);
-    let gpu = run_gpu(&ctx, &input, &config);
     let cpu = oracle::gaussian6(
         &input,
         &skin(config.samples),
@@ -57,13 +69,7 @@ fn gaussian6_matches_oracle() {
         config.min_sigma_px,
     )
     .unwrap();
-    let d = max_abs_diff(&gpu, &cpu);
-    eprintln!("gaussian6: max |GPU - oracle| = {d:.2e}");
-    assert!(d < TOL_GAUSSIAN6, "gaussian6: {d}");
-    assert!(
-        max_abs_diff(&gpu, &input.color) > 0.01,
-        "gaussian6 did not blur"
-    );
+    assert_blurs_as_oracle(&ctx, &input, &config, &cpu, TOL_GAUSSIAN6, "gaussian6");
 }
 
 #[test]
@@ -71,17 +77,9 @@ fn hable13_matches_oracle() {
     let Some(ctx) = context() else { return };
     let input = test_card();
     let config = settings(SssMethod::Hable13);
-    let gpu = run_gpu(&ctx, &input, &config);
     let cpu = oracle::hable13(&input, &skin(config.samples), &params(&config)).unwrap();
-    let d = max_abs_diff(&gpu, &cpu);
-    eprintln!("hable13: max |GPU - oracle| = {d:.2e}");
-    assert!(d < TOL_HABLE13, "hable13: {d}");
-    assert!(
-        max_abs_diff(&gpu, &input.color) > 0.01,
-        "hable13 did not blur"
-    );
+    assert_blurs_as_oracle(&ctx, &input, &config, &cpu, TOL_HABLE13, "hable13");
 }
-
 
 #[test]
 fn uniformly_lit_flat_skin_keeps_its_energy() {
@@ -322,4 +320,3 @@ fn bad_sss_settings_are_errors() {
     }
     let _ = scene;
 }
-

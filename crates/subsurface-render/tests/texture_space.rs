@@ -4,58 +4,22 @@
 
 mod common;
 
-use common::{assets_dir, context, flip_against_reference, repo_root};
+use common::{
+    camera_toml, context, flip_against_reference, head_scene, options, read4, upload_texture,
+    white_object_scene,
+};
 use subsurface_profile::{SumOfGaussians, gaussian};
 use subsurface_render::SssMethod;
 use subsurface_render::TransmittanceMethod;
 use subsurface_render::passes::texture_space::{
     BlurKernel, MAP_FORMAT, STRETCH_FORMAT, TextureBlur, cpu_blur, cpu_dilate,
 };
-use subsurface_render::{GpuContext, RenderOptions, Renderer, Scene, readback};
+use subsurface_render::{GpuContext, RenderOptions, Renderer, Scene};
 
 /// GPU blur vs its CPU mirror: largest absolute difference over the map, relative to the
 /// largest value (Rgba16Float intermediates; the mirror rounds at the same points, so what
 /// remains is the order of float operations and the rounding of blending).
 const GPU_VS_CPU_MAX: f32 = 5e-3;
-
-fn upload(ctx: &GpuContext, size: u32, format: wgpu::TextureFormat, bytes: &[u8]) -> wgpu::Texture {
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test map"),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_DST
-            | wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let texel = format.block_copy_size(None).unwrap();
-    ctx.queue.write_texture(
-        t.as_image_copy(),
-        bytes,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(texel * size),
-            rows_per_image: None,
-        },
-        t.size(),
-    );
-    t
-}
-
-fn read4(ctx: &GpuContext, t: &wgpu::Texture) -> Vec<[f32; 4]> {
-    let (v, c) = readback::read_float(ctx, t).unwrap();
-    assert_eq!(c, 4);
-    v.chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect()
-}
 
 /// Runs the GPU blur on `irradiance` / `stretch`; returns (accum, widest, padded result,
 /// padded widest).
@@ -73,8 +37,14 @@ fn gpu_blur(
         .flatten()
         .map(|v| half::f16::from_f32(*v))
         .collect();
-    let e = upload(ctx, size, MAP_FORMAT, bytemuck::cast_slice(&e));
-    let s = upload(ctx, size, STRETCH_FORMAT, bytemuck::cast_slice(stretch));
+    let e = upload_texture(ctx, size, size, MAP_FORMAT, bytemuck::cast_slice(&e));
+    let s = upload_texture(
+        ctx,
+        size,
+        size,
+        STRETCH_FORMAT,
+        bytemuck::cast_slice(stretch),
+    );
     let blur = TextureBlur::new(&ctx.device);
     let targets = blur.bind(&ctx.device, &e, &s, kernel, padding);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -243,22 +213,8 @@ fn blur_approximates_the_exact_sum_of_gaussians() {
     assert!(worst < EXACT_MAX, "{worst}");
 }
 
-/// scenes/head.toml, reading the head from SUBSURFACE_ASSETS.
-fn head_scene() -> Option<Scene> {
-    let assets = assets_dir()?;
-    let path = repo_root().join("scenes/head.toml");
-    let text = std::fs::read_to_string(&path)
-        .unwrap()
-        .replace("../../shared/assets", &assets.to_string_lossy());
-    let desc =
-        subsurface_render::scene::SceneDesc::from_toml_str(&text, "scenes/head.toml").unwrap();
-    Some(Scene::from_desc(desc, &repo_root().join("scenes"), "scenes/head.toml").unwrap())
-}
-
 fn texture_options(scene: &Scene, padding: u32) -> RenderOptions {
-    let mut opts = RenderOptions::from_scene(scene);
-    opts.settings.width = 256;
-    opts.settings.height = 256;
+    let mut opts = options(scene, 256, 256);
     opts.settings.sss.method = SssMethod::Texture;
     opts.settings.sss.texture_padding = padding;
     opts
@@ -382,33 +338,13 @@ fn head_seams_are_not_dark() {
 /// A 4 mm skin sphere seen from 3 cm, lit by one shadowed directional light from `light`
 /// (towards the origin), no ambient light.
 fn small_sphere(light: [f32; 3]) -> Scene {
-    let [x, y, z] = light;
-    common::scene(&format!(
-        r#"
-        [camera]
-        position = [0.0, 0.0, 0.03]
-        target = [0.0, 0.0, 0.0]
-        fov_y_deg = 20.0
-        near = 0.005
-        far = 1.0
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        transmittance = {{ normal_shrink = 0.0001 }}
-        [[lights]]
-        kind = "directional"
-        position = [{x:?}, {y:?}, {z:?}]
-        target = [0.0, 0.0, 0.0]
-        intensity = 1.0
-        shadow_map_size = 512
-        shadow_bias = 0.00005
-        [[objects]]
-        mesh = {{ shape = "sphere", radius = 0.002, segments = 64 }}
-        mm_per_unit = 1000.0
-        [objects.material]
-        albedo = [1.0, 1.0, 1.0]
-        specular = 0.0
-        "#
-    ))
+    white_object_scene(
+        &camera_toml(0.03, 20.0, "near = 0.005\nfar = 1.0"),
+        light,
+        512,
+        r#"{ shape = "sphere", radius = 0.002, segments = 64 }"#,
+        "skin",
+    )
 }
 
 /// TSM: a small sphere (4 mm across) lit from behind transmits the back side's blurred
@@ -418,9 +354,7 @@ fn tsm_transmits_through_a_backlit_sphere() {
     let Some(ctx) = context() else { return };
     let scene_with_light = |z: f32| small_sphere([0.0, 0.0, z]);
     let render = |scene: &Scene, method: TransmittanceMethod| {
-        let mut opts = RenderOptions::from_scene(scene);
-        opts.settings.width = 64;
-        opts.settings.height = 64;
+        let mut opts = options(scene, 64, 64);
         opts.settings.sss.method = SssMethod::Texture;
         opts.settings.sss.texture_size = 256;
         opts.settings.transmittance.method = method;
@@ -462,9 +396,7 @@ fn irradiance_view_shows_the_uv_map() {
     let Some(ctx) = context() else { return };
     let scene = small_sphere([1.0, 0.5, 1.0]);
     let (w, h, size) = (128u32, 64u32, 64u32);
-    let mut opts = RenderOptions::from_scene(&scene);
-    opts.settings.width = w;
-    opts.settings.height = h;
+    let mut opts = options(&scene, w, h);
     opts.view = subsurface_render::DebugView::Irradiance;
     opts.settings.sss.method = SssMethod::Texture;
     opts.settings.sss.texture_size = size;

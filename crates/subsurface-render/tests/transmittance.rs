@@ -3,11 +3,11 @@
 
 mod common;
 
-use common::{context, scene};
+use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
 use subsurface_render::SssMethod;
 use subsurface_render::TransmittanceMethod;
-use subsurface_render::{DebugView, RenderOptions, Renderer, Scene};
+use subsurface_render::{DebugView, Renderer, Scene};
 
 const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
 
@@ -17,33 +17,14 @@ fn backlit(object: &str, shadow_map_size: u32) -> Scene {
 }
 
 fn backlit_material(object: &str, shadow_map_size: u32, profile: &str) -> Scene {
-    scene(&format!(
-        r#"
-        [camera]
-        position = [0.0, 0.0, 0.3]
-        target = [0.0, 0.0, 0.0]
-        fov_y_deg = 20.0
-        near = 0.05
-        far = 2.0
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        transmittance = {{ normal_shrink = {SHRINK} }}
-        [[lights]]
-        kind = "directional"
-        position = [0.0, 0.0, -1.0]
-        target = [0.0, 0.0, 0.0]
-        intensity = 1.0
-        shadow_map_size = {shadow_map_size}
-        shadow_bias = 0.00005
-        [[objects]]
-        mesh = {object}
-        mm_per_unit = 1000.0
-        [objects.material]
-        albedo = [1.0, 1.0, 1.0]
-        specular = 0.0
-        profile = "{profile}"
-        "#
-    ))
+    // The normal shrink is SHRINK.
+    white_object_scene(
+        &camera_toml(0.3, 20.0, "near = 0.05\nfar = 2.0"),
+        [0.0, 0.0, -1.0],
+        shadow_map_size,
+        object,
+        profile,
+    )
 }
 
 fn render_diffuse(
@@ -53,9 +34,7 @@ fn render_diffuse(
     method: TransmittanceMethod,
 ) -> (Vec<[f32; 4]>, Vec<f32>) {
     let ctx = context().unwrap();
-    let mut opts = RenderOptions::from_scene(scene);
-    opts.settings.width = w;
-    opts.settings.height = h;
+    let mut opts = options(scene, w, h);
     opts.settings.sss.method = SssMethod::None;
     opts.settings.transmittance.method = method;
     let mut r = Renderer::new(&ctx, scene, opts).unwrap();
@@ -67,6 +46,18 @@ fn skin_t(s_mm: f32) -> [f32; 3] {
     SumOfGaussians::skin()
         .transmittance(s_mm as f64)
         .map(|v| v as f32)
+}
+
+/// Each channel of `got` within 0.002 + 3% of `want` (the `model`'s transmitted light).
+fn assert_transmits(got: [f32; 4], want: [f32; 3], model: &str) {
+    for c in 0..3 {
+        assert!(
+            (got[c] - want[c]).abs() < 0.002 + 0.03 * want[c],
+            "channel {c}: {} vs {model} {}",
+            got[c],
+            want[c]
+        );
+    }
 }
 
 /// The prism of 000_* (Figure 6b): 0 mm thick at its left edge, 8 mm at its right.
@@ -161,26 +152,13 @@ fn backlit_slab_transmits_the_analytic_colour() {
     let (diffuse, _) = render_diffuse(&s, w, h, TransmittanceMethod::Paper);
     let got = diffuse[(h / 2 * w + w / 2) as usize];
     let want = skin_t(thickness * 1000.0 - SHRINK * 1000.0).map(|t| t * 1.3);
-    for c in 0..3 {
-        assert!(
-            (got[c] - want[c]).abs() < 0.002 + 0.03 * want[c],
-            "channel {c}: {} vs analytic {}",
-            got[c],
-            want[c]
-        );
-    }
+    assert_transmits(got, want, "analytic");
     // Beer-Lambert with skin1's extinction: exp(-sigma_t s) x E.
     let (diffuse, _) = render_diffuse(&s, w, h, TransmittanceMethod::Beer);
     let got = diffuse[(h / 2 * w + w / 2) as usize];
     let sigma_t = [0.772f32, 1.05, 1.49];
-    for c in 0..3 {
-        let want = (-sigma_t[c] * (thickness * 1000.0 - SHRINK * 1000.0)).exp() * 1.3;
-        assert!(
-            (got[c] - want).abs() < 0.002 + 0.03 * want,
-            "beer channel {c}: {} vs {want}",
-            got[c]
-        );
-    }
+    let want = sigma_t.map(|s| (-s * (thickness * 1000.0 - SHRINK * 1000.0)).exp() * 1.3);
+    assert_transmits(got, want, "Beer-Lambert");
 }
 
 #[test]
@@ -209,9 +187,7 @@ fn transmittance_reddens_thin_parts_and_stays_finite() {
     let Some(ctx) = context() else { return };
     let scene = Scene::default_scene();
     let render = |method| {
-        let mut opts = RenderOptions::from_scene(&scene);
-        opts.settings.width = 192;
-        opts.settings.height = 108;
+        let mut opts = options(&scene, 192, 108);
         opts.settings.transmittance.method = method;
         let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
         r.render().unwrap();
@@ -305,9 +281,7 @@ fn thickness_view_shows_the_wedge_thickness() {
     );
     let (w, h) = (256u32, 160u32);
     let render = |scene: &Scene, view: DebugView| {
-        let mut opts = RenderOptions::from_scene(scene);
-        opts.settings.width = w;
-        opts.settings.height = h;
+        let mut opts = options(scene, w, h);
         opts.view = view;
         let mut r = Renderer::new(&ctx, scene, opts).unwrap();
         let frame = r.render().unwrap();
@@ -435,14 +409,7 @@ fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
         .sample(s_mm)
         .map(|t| t * 1.3);
     let got = diffusion[centre];
-    for c in 0..3 {
-        assert!(
-            (got[c] - want[c]).abs() < 0.002 + 0.03 * want[c],
-            "channel {c}: {} vs multipole {}",
-            got[c],
-            want[c]
-        );
-    }
+    assert_transmits(got, want, "multipole");
     assert!(want[0] > 0.3, "6 mm of skin1 should pass red: {want:?}");
     assert!(
         got[0] > 100.0 * paper[centre][0],

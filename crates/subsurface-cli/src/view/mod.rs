@@ -4,12 +4,13 @@
 //! compares two settings.
 //!
 //! Layout: `camera` (orbit/fly math, unit-tested), `state` (all settings <-> scene file and
-//! `RenderOptions`, round-trip tested), `model` (edits, no GPU), `panel` (egui), `app`
-//! (window, surface, device, frame loop).
+//! `RenderOptions`, round-trip tested), `model` (edits, no GPU), `panel` (egui), `gfx` (what
+//! lives on the device: surface, egui and scene renderers), `app` (window and frame loop).
 
 mod app;
 mod camera;
 mod fonts;
+mod gfx;
 mod model;
 mod panel;
 mod state;
@@ -65,15 +66,7 @@ pub struct ViewArgs {
 /// Loads the scene and applies the command line on top of it.
 fn initial_state(args: &ViewArgs) -> Result<(ViewerState, Scene)> {
     let (mut state, mut scene) = match &args.scene {
-        Some(p) => {
-            let state = ViewerState::load(p)?;
-            let scene = Scene::from_desc(
-                state.desc.clone(),
-                &state.base_dir,
-                &p.display().to_string(),
-            )?;
-            (state, scene)
-        }
+        Some(p) => ViewerState::load_with_scene(p)?,
         None => (
             ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "<default scene>")?,
             Scene::default_scene(),
@@ -94,9 +87,7 @@ fn initial_state(args: &ViewArgs) -> Result<(ViewerState, Scene)> {
         state.a.view = v.into();
     }
     if let Some(c) = args.compare {
-        state.compare = true;
-        state.b = state.a.clone();
-        state.b.sss.method = c;
+        state.compare_with(c);
     }
     Ok((state, scene))
 }

@@ -284,12 +284,7 @@ impl Model {
     }
 
     fn open_scene(&mut self, path: &Path) -> Result<()> {
-        let state = ViewerState::load(path)?;
-        let scene = Scene::from_desc(
-            state.desc.clone(),
-            &state.base_dir,
-            &path.display().to_string(),
-        )?;
+        let (state, scene) = ViewerState::load_with_scene(path)?;
         let size = (self.state.desc.render.width, self.state.desc.render.height);
         let (compare, b, split) = (self.state.compare, self.state.b.clone(), self.state.split);
         *self = Model {

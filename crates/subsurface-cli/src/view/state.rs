@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
 use subsurface_render::{
-    DebugView, RenderOptions, RenderSettings, SssMethod, SssSettings, TransmittanceMethod,
+    DebugView, RenderOptions, RenderSettings, Scene, SssMethod, SssSettings, TransmittanceMethod,
     TransmittanceSettings,
 };
 
@@ -192,6 +192,24 @@ impl ViewerState {
             .filter(|p| !p.as_os_str().is_empty())
             .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
         Self::from_toml_str(&text, base, &name)
+    }
+
+    /// [`load`](Self::load), and the scene the file describes (meshes and textures loaded).
+    pub fn load_with_scene(path: &Path) -> Result<(Self, Scene)> {
+        let state = Self::load(path)?;
+        let scene = Scene::from_desc(
+            state.desc.clone(),
+            &state.base_dir,
+            &path.display().to_string(),
+        )?;
+        Ok((state, scene))
+    }
+
+    /// Split screen with side `a`'s settings on both sides, but `method` on the right.
+    pub fn compare_with(&mut self, method: SssMethod) {
+        self.b = self.a.clone();
+        self.b.sss.method = method;
+        self.compare = true;
     }
 }
 

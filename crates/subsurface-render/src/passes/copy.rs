@@ -1,5 +1,6 @@
 //! Full-screen copy pass, the baseline cost that `subsurface bench` divides SSS times by.
 
+use crate::passes::util;
 use crate::timing::TimedPass;
 
 pub const SHADER: &str = concat!(include_str!("fullscreen.wgsl"), include_str!("copy.wgsl"));
@@ -13,10 +14,7 @@ pub struct CopyPass {
 impl CopyPass {
     /// Copies `source` into a new texture of the same size and format on every `encode`.
     pub fn new(device: &wgpu::Device, source: &wgpu::Texture) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("copy.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
+        let module = util::wgsl_module(device, "copy.wgsl", SHADER);
         let pipeline = super::fullscreen::pipeline(
             device,
             &module,
@@ -34,18 +32,16 @@ impl CopyPass {
                 ),
             }],
         });
-        let target = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("copy target"),
-                size: source.size(),
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: source.format(),
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let target = util::texture_2d(
+            device,
+            "copy target",
+            source.width(),
+            source.height(),
+            source.depth_or_array_layers(),
+            source.format(),
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
         Self {
             pipeline,
             bind_group,
@@ -62,15 +58,7 @@ impl CopyPass {
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("copy"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[util::color_attachment(&self.target, wgpu::LoadOp::Load)],
                 depth_stencil_attachment: None,
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,

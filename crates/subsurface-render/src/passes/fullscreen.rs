@@ -2,6 +2,10 @@
 //! WGSL is `fullscreen.wgsl` (which declares `vs_fullscreen`) followed by their own, and only
 //! the fragment entry point and targets differ.
 
+/// The WGSL of the vertex stage, `vs_fullscreen`: put it before a fragment shader of your own
+/// to draw with [`pipeline`].
+pub const VERTEX_WGSL: &str = include_str!("fullscreen.wgsl");
+
 /// A pipeline drawing one full-screen triangle (3 vertices, no vertex buffer) with
 /// `module`'s `vs_fullscreen` and the fragment entry point `fragment`. `layout: None` lets
 /// wgpu derive the bind group layouts from the shader.

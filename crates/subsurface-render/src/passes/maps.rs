@@ -66,28 +66,17 @@ pub fn maps_bind_group(
         min_filter: wgpu::FilterMode::Linear,
         ..Default::default()
     });
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("texture-space maps"),
+    util::bind_group(
+        device,
+        "texture-space maps",
         layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(result),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: wgpu::BindingResource::TextureView(widest),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::Sampler(&sampler),
-            },
+        [
+            (0, uniform.as_entire_binding()),
+            (1, wgpu::BindingResource::TextureView(result)),
+            (2, wgpu::BindingResource::TextureView(widest)),
+            (3, wgpu::BindingResource::Sampler(&sampler)),
         ],
-    })
+    )
 }
 
 /// Group 2 for an object without texture-space maps (plain lighting).

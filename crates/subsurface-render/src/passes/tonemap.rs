@@ -89,21 +89,8 @@ impl ToneMapPass {
     /// `output_format` is the format of the view given to `encode` (e.g. a swapchain format).
     pub fn new(device: &wgpu::Device, output_format: wgpu::TextureFormat) -> Self {
         let module = util::wgsl_module(device, "tonemap.wgsl", SHADER);
-        let fragment = wgpu::ShaderStages::FRAGMENT;
-        let tex = |binding| {
-            util::float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tonemap"),
-            entries: &[
-                util::uniform_entry(0, fragment),
-                tex(1),
-                tex(2),
-                tex(3),
-                tex(4),
-            ],
-        });
-        let pipeline_layout = util::pipeline_layout(device, "tonemap", &[&layout]);
+        let (layout, pipeline_layout) =
+            util::image_pass_layouts(device, "tonemap", 0, &[1, 2, 3, 4]);
         let pipeline = super::fullscreen::pipeline(
             device,
             &module,
@@ -125,24 +112,18 @@ impl ToneMapPass {
 
     /// Builds the bind group for a set of inputs; keep it while the inputs live.
     pub fn bind(&self, device: &wgpu::Device, inputs: &ToneMapInputs<'_>) -> wgpu::BindGroup {
-        let view = |binding, v| wgpu::BindGroupEntry {
-            binding,
-            resource: wgpu::BindingResource::TextureView(v),
-        };
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("tonemap"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.params.as_entire_binding(),
-                },
-                view(1, inputs.diffuse),
-                view(2, inputs.specular),
-                view(3, inputs.depth),
-                view(4, inputs.sss),
+        util::image_pass_bind_group(
+            device,
+            "tonemap",
+            &self.layout,
+            (0, &self.params),
+            &[
+                (1, inputs.diffuse),
+                (2, inputs.specular),
+                (3, inputs.depth),
+                (4, inputs.sss),
             ],
-        })
+        )
     }
 
     /// Sets exposure (in EV), the debug view and the far plane (for the depth view).

@@ -2,8 +2,11 @@
 //! 2-D textures and their views, mesh pipelines and render pass attachments. Only the values
 //! that differ between passes are parameters; everything else is what every pass used.
 
+use wgpu::util::DeviceExt;
+
 pub use crate::gpu::layout::{float_texture_entry, sampler_entry, storage_entry, uniform_entry};
-use crate::gpu_scene::VERTEX_LAYOUT;
+use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
+use crate::timing::TimedPass;
 
 /// The z-buffer of every depth-tested mesh pass; [`depth_buffer`] and [`MeshPipeline`] share it
 /// so that a pipeline always matches the buffer it is drawn with.
@@ -29,6 +32,67 @@ pub fn pipeline_layout(
         bind_group_layouts: &groups,
         immediate_size: 0,
     })
+}
+
+/// The layouts of an image pass's one bind group, both named `label`: a uniform at `uniform`
+/// then 2-D float textures at `textures` (unfilterable: read without a sampler), all read by
+/// the fragment stage; and the pipeline layout of that group alone.
+pub fn image_pass_layouts(
+    device: &wgpu::Device,
+    label: &str,
+    uniform: u32,
+    textures: &[u32],
+) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let fragment = wgpu::ShaderStages::FRAGMENT;
+    let entries: Vec<_> = std::iter::once(uniform_entry(uniform, fragment))
+        .chain(textures.iter().map(|&binding| {
+            float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
+        }))
+        .collect();
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    });
+    let pipeline_layout = pipeline_layout(device, label, &[&layout]);
+    (layout, pipeline_layout)
+}
+
+/// A bind group of `layout` with each `(binding, resource)` of `entries`.
+pub fn bind_group<'a>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    entries: impl IntoIterator<Item = (u32, wgpu::BindingResource<'a>)>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = entries
+        .into_iter()
+        .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A bind group of [`image_pass_layouts`]' layout: the whole of `uniform.1` at binding
+/// `uniform.0`, then each `(binding, view)` of `textures`.
+pub fn image_pass_bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    uniform: (u32, &wgpu::Buffer),
+    textures: &[(u32, &wgpu::TextureView)],
+) -> wgpu::BindGroup {
+    let views = textures
+        .iter()
+        .map(|&(binding, view)| (binding, wgpu::BindingResource::TextureView(view)));
+    bind_group(
+        device,
+        label,
+        layout,
+        std::iter::once((uniform.0, uniform.1.as_entire_binding())).chain(views),
+    )
 }
 
 /// A 2-D texture with one mip level and one sample; `layers` > 1 makes an array.
@@ -216,4 +280,177 @@ pub fn depth_attachment(
         }),
         stencil_ops: None,
     })
+}
+
+/// What differs between the passes that draw the objects once per shadow layer into that
+/// layer of an array atlas (the shadow maps and the translucent shadow maps).
+pub struct LayeredPassDesc<'a> {
+    /// Names the pipeline, the render and timed passes; "{label} view" the per-layer light
+    /// camera uniform, "{label} depth" the z-buffer and "{label}.wgsl" the shader.
+    pub label: &'static str,
+    pub atlas_label: &'a str,
+    pub shader: &'a str,
+    pub vertex: &'a str,
+    pub fragment: &'a str,
+    pub format: wgpu::TextureFormat,
+    /// Binding (in group 0) and stages of the light camera uniform; the objects are group 1.
+    pub view_binding: u32,
+    pub view_visibility: wgpu::ShaderStages,
+    /// What texels where nothing is drawn hold.
+    pub clear: wgpu::Color,
+}
+
+/// One shadow layer of a [`LayeredPass`]: its size in texels, its light camera and the atlas
+/// layer it renders to.
+struct AtlasLayer {
+    size: u32,
+    view_buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    target: wgpu::TextureView,
+}
+
+/// The objects drawn without culling and depth-tested into one atlas layer per shadow layer,
+/// each through its own light camera.
+pub struct LayeredPass {
+    label: &'static str,
+    clear: wgpu::Color,
+    pipeline: wgpu::RenderPipeline,
+    layers: Vec<AtlasLayer>,
+    depth: wgpu::TextureView,
+    /// `atlas_size` texels square, one layer per shadow layer (at least one).
+    pub atlas: wgpu::Texture,
+    /// All of `atlas` as a `texture_2d_array`.
+    pub atlas_view: wgpu::TextureView,
+}
+
+impl LayeredPass {
+    /// `uniform` is each layer's light camera.
+    pub fn new<U: bytemuck::Pod>(
+        device: &wgpu::Device,
+        desc: &LayeredPassDesc,
+        object_layout: &wgpu::BindGroupLayout,
+        layers: &[ShadowLayer],
+        atlas_size: u32,
+        uniform: impl Fn(&ShadowLayer) -> U,
+    ) -> Self {
+        let label = desc.label;
+        let view_label = format!("{label} view");
+        let module = wgsl_module(device, &format!("{label}.wgsl"), desc.shader);
+        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(&view_label),
+            entries: &[uniform_entry(desc.view_binding, desc.view_visibility)],
+        });
+        let layout = pipeline_layout(device, label, &[&view_layout, object_layout]);
+        let pipeline = MeshPipeline {
+            label,
+            layout: &layout,
+            module: &module,
+            vertex: desc.vertex,
+            fragment: desc.fragment,
+            targets: &[desc.format],
+            // No culling: thickness needs the surface nearest the light whichever way it faces.
+            cull_mode: None,
+            depth_test: true,
+        }
+        .create(device);
+        let size = atlas_size.max(1);
+        let atlas = texture_2d(
+            device,
+            desc.atlas_label,
+            size,
+            size,
+            layers.len().max(1) as u32,
+            desc.format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = depth_buffer(device, &format!("{label} depth"), size, size);
+        let layers = layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let view_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&view_label),
+                    contents: bytemuck::bytes_of(&uniform(l)),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                });
+                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&view_label),
+                    layout: &view_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: desc.view_binding,
+                        resource: view_buffer.as_entire_binding(),
+                    }],
+                });
+                AtlasLayer {
+                    size: l.size,
+                    view_buffer,
+                    bind_group,
+                    target: layer_view(&atlas, i as u32),
+                }
+            })
+            .collect();
+        Self {
+            label,
+            clear: desc.clear,
+            pipeline,
+            layers,
+            depth,
+            atlas_view: array_view(&atlas),
+            atlas,
+        }
+    }
+
+    /// Moves the light cameras (same layers and sizes as at creation).
+    pub fn move_cameras<U: bytemuck::Pod>(
+        &mut self,
+        queue: &wgpu::Queue,
+        layers: &[ShadowLayer],
+        uniform: impl Fn(&ShadowLayer) -> U,
+    ) {
+        for (layer, new) in self.layers.iter_mut().zip(layers) {
+            layer.size = new.size;
+            queue.write_buffer(&layer.view_buffer, 0, bytemuck::bytes_of(&uniform(new)));
+        }
+    }
+
+    /// Number of layers rendered each frame.
+    pub fn layer_count(&self) -> usize {
+        self.layers.len()
+    }
+
+    /// Renders every layer, each in its own timed render pass named after the pass.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        objects: &[GpuObject],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        for layer in &self.layers {
+            let timer = TimedPass::begin(profiler, self.label, encoder);
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(self.label),
+                    color_attachments: &[color_attachment(
+                        &layer.target,
+                        wgpu::LoadOp::Clear(self.clear),
+                    )],
+                    depth_stencil_attachment: depth_attachment(&self.depth),
+                    timestamp_writes: timer.writes(),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                let size = layer.size;
+                pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
+                pass.set_scissor_rect(0, 0, size, size);
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &layer.bind_group, &[]);
+                for o in objects {
+                    o.draw(&mut pass);
+                }
+            }
+            timer.end(profiler, encoder);
+        }
+    }
 }

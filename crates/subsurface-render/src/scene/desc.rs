@@ -10,45 +10,31 @@ use crate::settings::RenderSettings;
 /// The gltf path that names the embedded vendored WebXR right hand.
 pub const BUILTIN_HAND: &str = "builtin:hand";
 
-fn d_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
+/// The functions serde's `default = "..."` attributes below name, one per default value.
+macro_rules! default_fns {
+    ($($name:ident: $t:ty = $value:expr;)*) => {$(
+        fn $name() -> $t {
+            $value
+        }
+    )*};
 }
-fn d_fov() -> f32 {
-    30.0
+
+default_fns! {
+    d_up: [f32; 3] = [0.0, 1.0, 0.0];
+    d_fov: f32 = 30.0;
+    d_near: f32 = 0.01;
+    d_far: f32 = 100.0;
+    d_white: [f32; 3] = [1.0, 1.0, 1.0];
+    d_zero3: [f32; 3] = [0.0, 0.0, 0.0];
+    d_one: f32 = 1.0;
+    d_inner: f32 = 20.0;
+    d_outer: f32 = 30.0;
+    d_shadow_size: u32 = 2048;
+    d_shadow_bias: f32 = 0.001;
+    d_mm_per_unit: f32 = 1000.0;
+    d_true: bool = true;
 }
-fn d_near() -> f32 {
-    0.01
-}
-fn d_far() -> f32 {
-    100.0
-}
-fn d_white() -> [f32; 3] {
-    [1.0, 1.0, 1.0]
-}
-fn d_zero3() -> [f32; 3] {
-    [0.0, 0.0, 0.0]
-}
-fn d_one() -> f32 {
-    1.0
-}
-fn d_inner() -> f32 {
-    20.0
-}
-fn d_outer() -> f32 {
-    30.0
-}
-fn d_shadow_size() -> u32 {
-    2048
-}
-fn d_shadow_bias() -> f32 {
-    0.001
-}
-fn d_mm_per_unit() -> f32 {
-    1000.0
-}
-fn d_true() -> bool {
-    true
-}
+
 fn is_true(b: &bool) -> bool {
     *b
 }
@@ -209,6 +195,26 @@ pub enum MeshDesc {
         radius: f32,
         segments: u32,
     },
+}
+
+impl MeshDesc {
+    /// The sizes of a built-in shape (scene units, each must be > 0), by field name; none
+    /// for a glTF mesh.
+    pub fn sizes(&self) -> Vec<(&'static str, f32)> {
+        let t = MeshDescToml::from(self.clone());
+        // In the order of each shape's fields.
+        [
+            ("width", t.width),
+            ("length", t.length),
+            ("height", t.height),
+            ("thickness", t.thickness),
+            ("max_thickness", t.max_thickness),
+            ("radius", t.radius),
+        ]
+        .into_iter()
+        .filter_map(|(name, size)| Some((name, size?)))
+        .collect()
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -186,35 +186,19 @@ impl SceneDesc {
         // objects
         for (i, o) in self.objects.iter().enumerate() {
             let f = |k: &str| format!("objects[{i}].{k}");
-            match &o.mesh {
-                MeshDesc::Gltf { path } => c.path(&f("mesh.gltf"), &Some(path.clone()))?,
-                MeshDesc::Slab {
-                    width,
-                    height,
-                    thickness,
-                } => {
-                    c.positive(&f("mesh.width"), *width)?;
-                    c.positive(&f("mesh.height"), *height)?;
-                    c.positive(&f("mesh.thickness"), *thickness)?;
-                }
-                MeshDesc::Wedge {
-                    length,
-                    height,
-                    max_thickness,
-                } => {
-                    c.positive(&f("mesh.length"), *length)?;
-                    c.positive(&f("mesh.height"), *height)?;
-                    c.positive(&f("mesh.max_thickness"), *max_thickness)?;
-                }
-                MeshDesc::Sphere { radius, segments } => {
-                    c.positive(&f("mesh.radius"), *radius)?;
-                    if !(3..=1024).contains(segments) {
-                        return Err(c.err(
-                            f("mesh.segments"),
-                            format!("must be in 3..=1024 (got {segments})"),
-                        ));
-                    }
-                }
+            if let MeshDesc::Gltf { path } = &o.mesh {
+                c.path(&f("mesh.gltf"), &Some(path.clone()))?;
+            }
+            for (name, size) in o.mesh.sizes() {
+                c.positive(&f(&format!("mesh.{name}")), size)?;
+            }
+            if let MeshDesc::Sphere { segments, .. } = o.mesh
+                && !(3..=1024).contains(&segments)
+            {
+                return Err(c.err(
+                    f("mesh.segments"),
+                    format!("must be in 3..=1024 (got {segments})"),
+                ));
             }
             c.positive(&f("mm_per_unit"), o.mm_per_unit)?;
             c.finite3(&f("translation"), o.translation)?;

@@ -10,6 +10,33 @@ pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
 
 use serde::{Deserialize, Serialize};
 
+/// `FromStr` and `Display` of a method enum by its `name()` (the scene-file and command-line
+/// spelling); parsing an unknown name lists the names of `ALL`.
+macro_rules! method_names {
+    ($($method:ty),*) => {$(
+        impl std::str::FromStr for $method {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, String> {
+                <$method>::ALL
+                    .into_iter()
+                    .find(|m| m.name() == s)
+                    .ok_or_else(|| {
+                        let names: Vec<&str> = <$method>::ALL.iter().map(|m| m.name()).collect();
+                        format!("{s:?} is not one of {}", names.join(", "))
+                    })
+            }
+        }
+
+        impl std::fmt::Display for $method {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    )*};
+}
+
+method_names!(SssMethod, TransmittanceMethod);
+
 /// A setting out of range. `field` is its path below `[render]` as written in a scene file
 /// (`width`, `sss.samples`, `transmittance.normal_shrink`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -134,22 +134,3 @@ impl SssSettings {
         )
     }
 }
-
-impl std::str::FromStr for SssMethod {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        SssMethod::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<&str> = SssMethod::ALL.iter().map(|m| m.name()).collect();
-                format!("{s:?} is not one of {}", names.join(", "))
-            })
-    }
-}
-
-impl std::fmt::Display for SssMethod {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}

@@ -105,22 +105,3 @@ impl TransmittanceSettings {
         Ok(())
     }
 }
-
-impl std::str::FromStr for TransmittanceMethod {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        TransmittanceMethod::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<&str> = TransmittanceMethod::ALL.iter().map(|m| m.name()).collect();
-                format!("{s:?} is not one of {}", names.join(", "))
-            })
-    }
-}
-
-impl std::fmt::Display for TransmittanceMethod {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}

@@ -3,8 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
+use subsurface_render::passes::util;
 use subsurface_render::scene::SceneDesc;
-use subsurface_render::{GpuContext, Scene, gpu_required};
+use subsurface_render::{GpuContext, RenderOptions, Scene, gpu_required, readback};
 
 /// The GPU context, or None (test skipped with a message) when no adapter exists and
 /// `SUBSURFACE_REQUIRE_GPU` is not 1. With it set, a missing adapter fails the test.
@@ -27,6 +28,128 @@ pub fn scene(toml: &str) -> Scene {
     Scene::from_desc(desc, Path::new("."), "test.toml").unwrap()
 }
 
+/// The `[camera]` table of a test scene: on the +z axis at `z`, looking at the origin with a
+/// vertical field of view of `fov_y_deg`, and the `key = value` lines of `more` (near, far).
+pub fn camera_toml(z: f32, fov_y_deg: f32, more: &str) -> String {
+    format!(
+        "[camera]\nposition = [0.0, 0.0, {z:?}]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = {fov_y_deg:?}\n{more}\n"
+    )
+}
+
+/// A `[[lights]]` table: a `kind` light at `position` aimed at the origin with `intensity`,
+/// and the `key = value` lines of `more` (angles, shadow map).
+pub fn light_toml(kind: &str, position: [f32; 3], intensity: f32, more: &str) -> String {
+    format!(
+        "[[lights]]\nkind = \"{kind}\"\nposition = {position:?}\ntarget = [0.0, 0.0, 0.0]\nintensity = {intensity:?}\n{more}\n"
+    )
+}
+
+/// A test scene without ambient light: `camera` ([`camera_toml`]), `light` ([`light_toml`])
+/// and the `[[objects]]` tables of `objects`.
+pub fn dark_scene(camera: &str, light: &str, objects: &str) -> Scene {
+    scene(&format!(
+        "{camera}\n[render]\nambient = [0.0, 0.0, 0.0]\n{light}\n{objects}"
+    ))
+}
+
+/// One white object (`mesh`, 1000 mm per unit, no specular, material `profile`) seen by
+/// `camera` ([`camera_toml`]) and lit only by a shadowed directional light of irradiance 1
+/// from `light` towards the origin (shadow bias 0.05 mm); no ambient light, and shaded points
+/// move 0.1 mm inward for the shadow lookup.
+pub fn white_object_scene(
+    camera: &str,
+    light: [f32; 3],
+    shadow_map_size: u32,
+    mesh: &str,
+    profile: &str,
+) -> Scene {
+    let light = light_toml(
+        "directional",
+        light,
+        1.0,
+        &format!("shadow_map_size = {shadow_map_size}\nshadow_bias = 0.00005"),
+    );
+    scene(&format!(
+        r#"
+        {camera}
+        [render]
+        ambient = [0.0, 0.0, 0.0]
+        transmittance = {{ normal_shrink = 0.0001 }}
+        {light}
+        [[objects]]
+        mesh = {mesh}
+        mm_per_unit = 1000.0
+        [objects.material]
+        albedo = [1.0, 1.0, 1.0]
+        specular = 0.0
+        profile = "{profile}"
+        "#
+    ))
+}
+
+/// The scene's own options at `width` x `height`.
+pub fn options(scene: &Scene, width: u32, height: u32) -> RenderOptions {
+    let mut o = RenderOptions::from_scene(scene);
+    (o.settings.width, o.settings.height) = (width, height);
+    o
+}
+
+/// A `w` x `h` texture of `format` holding `bytes` (rows packed tightly), which passes can
+/// sample and render to and which can be copied and read back.
+pub fn upload_texture(
+    ctx: &GpuContext,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    let t = util::texture_2d(
+        &ctx.device,
+        "test input",
+        w,
+        h,
+        1,
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+    );
+    let texel = format.block_copy_size(None).unwrap();
+    ctx.queue.write_texture(
+        t.as_image_copy(),
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * texel),
+            rows_per_image: None,
+        },
+        t.size(),
+    );
+    t
+}
+
+/// A four-channel float texture read back, one `[f32; 4]` per texel.
+pub fn read4(ctx: &GpuContext, t: &wgpu::Texture) -> Vec<[f32; 4]> {
+    let (v, c) = readback::read_float(ctx, t).unwrap();
+    assert_eq!(c, 4);
+    v.chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect()
+}
+
+/// scenes/head.toml, reading the head from SUBSURFACE_ASSETS.
+pub fn head_scene() -> Option<Scene> {
+    let assets = assets_dir()?;
+    // scenes/head.toml points at ../../shared/assets; tests honour SUBSURFACE_ASSETS instead.
+    let path = repo_root().join("scenes/head.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("../../shared/assets", &assets.to_string_lossy());
+    let desc = SceneDesc::from_toml_str(&text, "scenes/head.toml").unwrap();
+    Some(Scene::from_desc(desc, &repo_root().join("scenes"), "scenes/head.toml").unwrap())
+}
+
 /// `../shared/assets` (or `SUBSURFACE_ASSETS`), or None when the head model is absent and the
 /// run does not require it. CI sets SUBSURFACE_ASSETS and SUBSURFACE_REQUIRE_GPU=1.
 pub fn assets_dir() -> Option<PathBuf> {
@@ -43,6 +166,25 @@ pub fn assets_dir() -> Option<PathBuf> {
     } else {
         eprintln!("skipping: no head model at {}", dir.display());
         None
+    }
+}
+
+/// xorshift64*: tiny, deterministic, good enough to pick mutations.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    /// Uniform in `0..n` (0 when `n` is 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+    pub fn pick<T: Copy>(&mut self, items: &[T]) -> T {
+        items[self.below(items.len())]
     }
 }
 
@@ -98,14 +240,7 @@ pub fn flip_against_reference(name: &str, actual: &image::RgbaImage, mean_max: f
 /// FLIP (NVIDIA's perceptual image difference) of two sRGB images: (mean, p95, heat map).
 pub fn flip(reference: &image::RgbaImage, test: &image::RgbaImage) -> (f32, f32, image::RgbImage) {
     let (w, h) = reference.dimensions();
-    let rgb = |i: &image::RgbaImage| {
-        image::DynamicImage::ImageRgba8(i.clone())
-            .to_rgb8()
-            .into_raw()
-    };
-    let r = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(reference));
-    let t = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(test));
-    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let err = flip_image(reference, test);
     let mut pool = nv_flip::FlipPool::from_image(&err);
     let heat = err.apply_color_lut(&nv_flip::magma_lut());
     let heat = image::RgbImage::from_raw(w, h, heat.to_vec()).unwrap();
@@ -127,6 +262,11 @@ pub fn masked_mean(values: &[f32], keep: impl Fn(usize) -> bool) -> f32 {
 
 /// Per-pixel FLIP error of two sRGB images.
 pub fn flip_errors(reference: &image::RgbaImage, test: &image::RgbaImage) -> Vec<f32> {
+    flip_image(reference, test).to_vec()
+}
+
+/// The FLIP error image of two sRGB images.
+fn flip_image(reference: &image::RgbaImage, test: &image::RgbaImage) -> nv_flip::FlipImageFloat {
     let (w, h) = reference.dimensions();
     let rgb = |i: &image::RgbaImage| {
         image::DynamicImage::ImageRgba8(i.clone())
@@ -135,7 +275,7 @@ pub fn flip_errors(reference: &image::RgbaImage, test: &image::RgbaImage) -> Vec
     };
     let r = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(reference));
     let t = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(test));
-    nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+    nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE)
 }
 
 /// The value below which `q` (0..1) of `values` lie.

@@ -5,47 +5,11 @@
 use subsurface_profile::oracle::{self, ScreenInput};
 use subsurface_profile::{KernelParams, ScreenKernels};
 use subsurface_render::passes::sss::{SssInputs, SssPass};
-use subsurface_render::{GpuContext, SssMethod, SssSettings, readback};
+use subsurface_render::{GpuContext, SssMethod, SssSettings};
+
+use crate::common::{read4, upload_texture};
 
 pub const FOCAL: f32 = 300.0;
-
-pub fn texture(
-    ctx: &GpuContext,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-    bytes: &[u8],
-) -> wgpu::Texture {
-    let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test input"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let texel = format.block_copy_size(None).unwrap();
-    ctx.queue.write_texture(
-        t.as_image_copy(),
-        bytes,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * texel),
-            rows_per_image: None,
-        },
-        t.size(),
-    );
-    t
-}
 
 /// Rounds colours to f16 as the GPU stores them, so oracle and GPU start from the same input.
 pub fn to_f16_exact(input: &mut ScreenInput) {
@@ -108,14 +72,14 @@ pub fn run_gpu_with(
         .flat_map(|c| [c[0], c[1], c[2], 1.0])
         .map(half::f16::from_f32)
         .collect();
-    let diffuse = texture(
+    let diffuse = upload_texture(
         ctx,
         w,
         h,
         wgpu::TextureFormat::Rgba16Float,
         bytemuck::cast_slice(&colour),
     );
-    let depth = texture(
+    let depth = upload_texture(
         ctx,
         w,
         h,
@@ -132,7 +96,7 @@ pub fn run_gpu_with(
             ]
         })
         .collect();
-    let sss = texture(
+    let sss = upload_texture(
         ctx,
         w,
         h,
@@ -154,9 +118,10 @@ pub fn run_gpu_with(
     pass.encode(&mut encoder, None);
     ctx.queue.submit([encoder.finish()]);
     ctx.check().unwrap();
-    let (v, c) = readback::read_float(ctx, &diffuse).unwrap();
-    assert_eq!(c, 4);
-    v.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
+    read4(ctx, &diffuse)
+        .into_iter()
+        .map(|p| [p[0], p[1], p[2]])
+        .collect()
 }
 
 /// A 96x64 test card: smooth colour waves (so bilinear weight precision does not matter),

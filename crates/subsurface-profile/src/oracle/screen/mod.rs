@@ -302,25 +302,57 @@ fn separable_pass_on(
     dir: [f32; 2],
     params: &ScreenParams,
 ) -> Vec<[f32; 3]> {
+    blur_with_taps(
+        input,
+        color,
+        kernels,
+        params,
+        |k| &k.separable,
+        |t| [t[0], t[1], t[2]],
+        |t, px_per_mm| {
+            let d = t[3] * px_per_mm;
+            [dir[0] * d, dir[1] * d]
+        },
+    )
+}
+
+/// The blur every tap-table method shares: pixels without SSS keep their colour; each other
+/// pixel sums `weight(kernel[0]) * colorM` and, in kernel order, `weight(t) * tap(c +
+/// offset_px(t, px_per_mm))` for the rest of its profile's `kernel`.
+fn blur_with_taps<const N: usize>(
+    input: &ScreenInput,
+    color: &[[f32; 3]],
+    kernels: &[ScreenKernels],
+    params: &ScreenParams,
+    kernel: impl Fn(&ScreenKernels) -> &[[f32; N]],
+    weight: impl Fn(&[f32; N]) -> [f32; 3],
+    offset_px: impl Fn(&[f32; N], f32) -> [f32; 2],
+) -> Vec<[f32; 3]> {
+    each_skin_pixel(input, color, params, |c| {
+        let kernel = kernel(&kernels[c.profile as usize]);
+        let mut acc = [0.0; 3];
+        accumulate(&mut acc, weight(&kernel[0]), c.color);
+        for t in &kernel[1..] {
+            let tap = c.tap(input, color, params, offset_px(t, c.px_per_mm));
+            accumulate(&mut acc, weight(t), tap);
+        }
+        acc
+    })
+}
+
+/// `color` with each pixel that has SSS (strength > 0) replaced by `blur` of its centre.
+fn each_skin_pixel(
+    input: &ScreenInput,
+    color: &[[f32; 3]],
+    params: &ScreenParams,
+    blur: impl Fn(&Centre) -> [f32; 3],
+) -> Vec<[f32; 3]> {
     (0..color.len())
         .map(|i| {
             if input.strength[i] == 0.0 {
                 return color[i];
             }
-            let c = Centre::new(input, color, params, i);
-            let kernel = &kernels[c.profile as usize].separable;
-            let mut acc = [0.0; 3];
-            accumulate(
-                &mut acc,
-                [kernel[0][0], kernel[0][1], kernel[0][2]],
-                c.color,
-            );
-            for t in &kernel[1..] {
-                let d = t[3] * c.px_per_mm;
-                let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
-                accumulate(&mut acc, [t[0], t[1], t[2]], tap);
-            }
-            acc
+            blur(&Centre::new(input, color, params, i))
         })
         .collect()
 }
@@ -366,26 +398,20 @@ fn gauss7_pass(
     params: &ScreenParams,
     min_sigma_px: f32,
 ) -> Vec<[f32; 3]> {
-    (0..color.len())
-        .map(|i| {
-            if input.strength[i] == 0.0 {
-                return color[i];
-            }
-            let c = Centre::new(input, color, params, i);
-            let sigma_px = sigma_mm(c.profile) * c.px_per_mm;
-            if sigma_px < min_sigma_px {
-                return c.color;
-            }
-            let mut acc = [0.0; 3];
-            accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[3]; 3], c.color);
-            for j in [0, 1, 2, 4, 5, 6] {
-                let d = GAUSSIAN7_OFFSETS_SIGMA[j] * sigma_px;
-                let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
-                accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[j]; 3], tap);
-            }
-            acc
-        })
-        .collect()
+    each_skin_pixel(input, color, params, |c| {
+        let sigma_px = sigma_mm(c.profile) * c.px_per_mm;
+        if sigma_px < min_sigma_px {
+            return c.color;
+        }
+        let mut acc = [0.0; 3];
+        accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[3]; 3], c.color);
+        for j in [0, 1, 2, 4, 5, 6] {
+            let d = GAUSSIAN7_OFFSETS_SIGMA[j] * sigma_px;
+            let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
+            accumulate(&mut acc, [GAUSSIAN7_WEIGHTS[j]; 3], tap);
+        }
+        acc
+    })
 }
 
 /// The sum-of-Gaussians blur of Jimenez et al. 2009 / GPU Pro (003_*).
@@ -460,32 +486,15 @@ pub fn hable13(
     input.validate()?;
     params.validate()?;
     check_table(input, kernels)?;
-    let color = &input.color;
-    Ok((0..color.len())
-        .map(|i| {
-            if input.strength[i] == 0.0 {
-                return color[i];
-            }
-            let c = Centre::new(input, color, params, i);
-            let kernel = &kernels[c.profile as usize].hable13;
-            let mut acc = [0.0; 3];
-            accumulate(
-                &mut acc,
-                [kernel[0][2], kernel[0][3], kernel[0][4]],
-                c.color,
-            );
-            for t in &kernel[1..] {
-                let tap = c.tap(
-                    input,
-                    color,
-                    params,
-                    [t[0] * c.px_per_mm, t[1] * c.px_per_mm],
-                );
-                accumulate(&mut acc, [t[2], t[3], t[4]], tap);
-            }
-            acc
-        })
-        .collect())
+    Ok(blur_with_taps(
+        input,
+        &input.color,
+        kernels,
+        params,
+        |k| &k.hable13,
+        |t| [t[2], t[3], t[4]],
+        |t, px_per_mm| [t[0] * px_per_mm, t[1] * px_per_mm],
+    ))
 }
 
 #[cfg(test)]

@@ -25,6 +25,12 @@ fn methods() -> [(&'static str, Method); 3] {
     ]
 }
 
+/// `result` is an error whose message starts with `field` (the offending input's name).
+fn assert_error_names(result: Result<Vec<[f32; 3]>>, field: &str) {
+    let e = result.unwrap_err().to_string();
+    assert!(e.starts_with(field), "{e}");
+}
+
 fn sum(img: &[[f32; 3]]) -> [f64; 3] {
     let mut s = [0.0; 3];
     for p in img {
@@ -273,59 +279,32 @@ fn bad_inputs_are_errors_not_panics() {
     assert_eq!(e, "depth: expected length 16 (got 15)");
     let mut input = ScreenInput::uniform(4, 4, [1.0; 3], 1.0, 1.0, 1.0);
     input.depth[5] = 0.0;
-    assert!(
-        hable13(&input, &k, &PARAMS)
-            .unwrap_err()
-            .to_string()
-            .starts_with("depth[5]: ")
-    );
+    assert_error_names(hable13(&input, &k, &PARAMS), "depth[5]: ");
     input.depth[5] = 1.0;
     input.strength[3] = 1.5;
-    assert!(
-        gaussian6(&input, &skin(), [true; 5], &PARAMS, 0.0)
-            .unwrap_err()
-            .to_string()
-            .starts_with("strength[3]: ")
+    assert_error_names(
+        gaussian6(&input, &skin(), [true; 5], &PARAMS, 0.0),
+        "strength[3]: ",
     );
     input.strength[3] = 1.0;
     let bad = ScreenParams {
         focal_px: -1.0,
         ..PARAMS
     };
-    assert!(
-        hable13(&input, &k, &bad)
-            .unwrap_err()
-            .to_string()
-            .starts_with("focal_px: ")
-    );
+    assert_error_names(hable13(&input, &k, &bad), "focal_px: ");
     let bad = ScreenParams {
         edge_mm: f32::NAN,
         ..PARAMS
     };
-    assert!(
-        hable13(&input, &k, &bad)
-            .unwrap_err()
-            .to_string()
-            .starts_with("edge_mm: ")
-    );
-    assert!(
-        separable(&input, &[], &PARAMS)
-            .unwrap_err()
-            .to_string()
-            .starts_with("kernels: ")
-    );
+    assert_error_names(hable13(&input, &k, &bad), "edge_mm: ");
+    assert_error_names(separable(&input, &[], &PARAMS), "kernels: ");
     // Background pixels may carry any depth (e.g. 0 or infinity).
     input.strength[0] = 0.0;
     input.depth[0] = f32::INFINITY;
     assert!(separable(&input, &k, &PARAMS).is_ok());
     // A pixel naming a profile the table does not have.
     input.profile[2] = 1;
-    assert!(
-        separable(&input, &k, &PARAMS)
-            .unwrap_err()
-            .to_string()
-            .starts_with("profile[2]: ")
-    );
+    assert_error_names(separable(&input, &k, &PARAMS), "profile[2]: ");
 }
 
 /// Two materials side by side at the same depth: each half is blurred with its own
@@ -341,17 +320,7 @@ fn profiles_do_not_mix_across_a_material_boundary() {
             input.profile[i] = 1;
         }
     }
-    let wide = crate::SumOfGaussians::new(
-        crate::SumOfGaussians::skin()
-            .terms()
-            .iter()
-            .map(|t| crate::GaussianTerm {
-                variance: t.variance * 9.0,
-                weight: t.weight,
-            })
-            .collect(),
-    )
-    .unwrap();
+    let wide = crate::gaussian::widened_skin(9.0);
     let mut table = skin();
     table.push(ScreenKernels::for_profile(&wide, &KernelParams::default()).unwrap());
     for (name, out) in [

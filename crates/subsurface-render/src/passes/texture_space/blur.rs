@@ -27,17 +27,14 @@ pub const SHADER: &str = concat!(
 /// The blur and padding pipelines; shared by every object.
 pub struct TextureBlur {
     layout: wgpu::BindGroupLayout,
-    /// `fs_ts_copy`: the narrowest Gaussian into the accumulated map.
-    copy: wgpu::RenderPipeline,
-    /// `fs_ts_blur`: horizontal pass of one variance increment.
-    blur: wgpu::RenderPipeline,
-    /// `fs_ts_blur_accumulate`: vertical pass, also added to the accumulated map.
-    accumulate: wgpu::RenderPipeline,
-    /// `fs_ts_dilate`: padding of the sum and of the widest Gaussian.
-    dilate: wgpu::RenderPipeline,
+    /// By [`Stage`]: `fs_ts_copy`, the narrowest Gaussian into the accumulated map;
+    /// `fs_ts_blur`, horizontal pass of one variance increment; `fs_ts_blur_accumulate`,
+    /// vertical pass, also added to the accumulated map; `fs_ts_dilate`, padding of the sum
+    /// and of the widest Gaussian.
+    pipelines: [wgpu::RenderPipeline; 4],
 }
 
-/// Which of [`TextureBlur`]'s pipelines a step runs.
+/// Which of [`TextureBlur`]'s pipelines a step runs (their index).
 #[derive(Clone, Copy, Debug)]
 enum Stage {
     Copy,
@@ -82,37 +79,27 @@ impl BlurTargets {
 impl TextureBlur {
     pub fn new(device: &wgpu::Device) -> Self {
         let module = util::wgsl_module(device, "texture_space/blur.wgsl", SHADER);
-        let fragment = wgpu::ShaderStages::FRAGMENT;
         // The stretch map is Rg32Float; the blur reads texels without a sampler anyway.
-        let tex = |binding| {
-            util::float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("texture-space blur"),
-            entries: &[util::uniform_entry(10, fragment), tex(11), tex(12), tex(13)],
-        });
-        let pipeline_layout = util::pipeline_layout(device, "texture-space blur", &[&layout]);
+        let (layout, pipeline_layout) =
+            util::image_pass_layouts(device, "texture-space blur", 10, &[11, 12, 13]);
         let replace = Some(wgpu::ColorTargetState::from(MAP_FORMAT));
         let additive = Some(util::additive_target(MAP_FORMAT));
         let make = |entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
             fullscreen::pipeline(device, &module, Some(&pipeline_layout), entry, targets)
         };
         Self {
-            copy: make("fs_ts_copy", std::slice::from_ref(&replace)),
-            blur: make("fs_ts_blur", std::slice::from_ref(&replace)),
-            accumulate: make("fs_ts_blur_accumulate", &[replace.clone(), additive]),
-            dilate: make("fs_ts_dilate", &[replace.clone(), replace]),
+            pipelines: [
+                make("fs_ts_copy", std::slice::from_ref(&replace)),
+                make("fs_ts_blur", std::slice::from_ref(&replace)),
+                make("fs_ts_blur_accumulate", &[replace.clone(), additive]),
+                make("fs_ts_dilate", &[replace.clone(), replace]),
+            ],
             layout,
         }
     }
 
     fn pipeline(&self, stage: Stage) -> &wgpu::RenderPipeline {
-        match stage {
-            Stage::Copy => &self.copy,
-            Stage::Blur => &self.blur,
-            Stage::Accumulate => &self.accumulate,
-            Stage::Dilate => &self.dilate,
-        }
+        &self.pipelines[stage as usize]
     }
 
     /// Creates the maps and bind groups that blur `irradiance` (`Rgba16Float`, square, alpha >
@@ -149,19 +136,13 @@ impl TextureBlur {
                 contents: bytemuck::bytes_of(&u),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("texture-space blur"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 10,
-                        resource: buffer.as_entire_binding(),
-                    },
-                    texture_entry(11, src),
-                    texture_entry(12, &stretch_view),
-                    texture_entry(13, extra),
-                ],
-            });
+            let bg = util::image_pass_bind_group(
+                device,
+                "texture-space blur",
+                &self.layout,
+                (10, &buffer),
+                &[(11, src), (12, &stretch_view), (13, extra)],
+            );
             uniforms.push(buffer);
             bg
         };
@@ -253,12 +234,5 @@ impl TextureBlur {
             }
             timer.end(profiler, encoder);
         }
-    }
-}
-
-fn texture_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: wgpu::BindingResource::TextureView(view),
     }
 }

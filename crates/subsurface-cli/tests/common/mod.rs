@@ -1,0 +1,99 @@
+//! Helpers the integration tests share: running the binary, scratch directories, and the
+//! GPU check that skips (or, with SUBSURFACE_REQUIRE_GPU=1, fails) tests that need an adapter.
+#![allow(dead_code)] // each test binary uses its own part
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_subsurface")
+}
+
+/// Runs `subsurface ARGS` in `dir`.
+pub fn subsurface(args: &[&str], dir: &Path) -> Output {
+    Command::new(bin())
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// An empty scratch directory, unique to this test binary, process and `name`.
+pub fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "subsurface-{}-{name}-{}",
+        env!("CARGO_CRATE_NAME"),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+pub fn require_gpu() -> bool {
+    std::env::var("SUBSURFACE_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+/// Skips a test (returns false) for `why`, or fails it when SUBSURFACE_REQUIRE_GPU=1.
+pub fn skip(why: &str) -> bool {
+    assert!(!require_gpu(), "SUBSURFACE_REQUIRE_GPU=1 but {why}");
+    eprintln!("skipped: {why}");
+    false
+}
+
+/// stdout and stderr, for messages.
+pub fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// Asserts that the command succeeded, showing its stderr if not.
+pub fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Whether GPU-dependent commands can be checked: a tiny `render` into `dir` succeeds. Without
+/// an adapter the test is skipped, or fails when SUBSURFACE_REQUIRE_GPU=1.
+pub fn gpu_available(dir: &Path) -> bool {
+    let out = subsurface(
+        &[
+            "render",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            "probe.png",
+        ],
+        dir,
+    );
+    out.status.success() || skip(&format!("no GPU adapter: {}", text(&out)))
+}
+
+/// Asserts that `bytes` are one whole PNG and nothing else: the signature first, the IEND
+/// chunk last (a summary line printed to the same stream would break either).
+pub fn assert_whole_png(bytes: &[u8]) {
+    let head = &bytes[..bytes.len().min(16)];
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{head:?}");
+    let tail = &bytes[bytes.len().saturating_sub(16)..];
+    assert!(bytes.ends_with(b"IEND\xae\x42\x60\x82"), "{tail:?}");
+}
+
+/// Runs `subsurface ARGS` in a scratch directory `name` and asserts that it succeeded; None
+/// when the test is skipped for want of a GPU adapter (see [`gpu_available`]).
+pub fn run_with_gpu(name: &str, args: &[&str]) -> Option<(PathBuf, Output)> {
+    let dir = tempdir(name);
+    if !gpu_available(&dir) {
+        return None;
+    }
+    let out = subsurface(args, &dir);
+    assert_success(&out);
+    Some((dir, out))
+}
