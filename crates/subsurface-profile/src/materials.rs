@@ -111,10 +111,28 @@ impl Material {
             | Material::Multipole {
                 name,
                 multipole: Multipole { dipole, .. },
-            } => Ok(Material::Multipole {
-                name,
-                multipole: Multipole::new(dipole, thickness_mm, Multipole::DEFAULT_PAIRS)?,
-            }),
+            } => {
+                // The multipole puts its real source one mean free path deep; a slab thinner
+                // than that has the source outside it and the sums turn negative (a
+                // transmittance below zero), so such a slab is outside the model.
+                let (c, z_r) = (0..3)
+                    .map(|c| (c, dipole.channel(c).z_r))
+                    .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+                if thickness_mm.is_finite() && thickness_mm <= z_r {
+                    return Err(ProfileError::Invalid {
+                        field: "thickness_mm".into(),
+                        reason: format!(
+                            "{thickness_mm} mm is not thicker than {name}'s mean free path \
+                             ({z_r:.3} mm in {}), below which diffusion theory does not hold",
+                            ["red", "green", "blue"][c]
+                        ),
+                    });
+                }
+                Ok(Material::Multipole {
+                    name,
+                    multipole: Multipole::new(dipole, thickness_mm, Multipole::DEFAULT_PAIRS)?,
+                })
+            }
             Material::Gaussians { name, .. } => Err(ProfileError::Invalid {
                 field: "thickness_mm".into(),
                 reason: format!(
@@ -209,5 +227,24 @@ mod tests {
         assert!(slab.total_reflectance()[0] < semi.total_reflectance()[0]);
         assert!(material("skin").unwrap().with_thickness(3.0).is_err());
         assert!(material("marble").unwrap().with_thickness(0.0).is_err());
+        // Thinner than a mean free path: outside the model (it gave T < 0), an error.
+        let e = material("marble")
+            .unwrap()
+            .with_thickness(0.1)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("thickness_mm: 0.1 mm is not thicker than"),
+            "{e}"
+        );
+        // Just above it, every channel's transmittance is a fraction.
+        let Material::Multipole { multipole, .. } =
+            material("marble").unwrap().with_thickness(0.5).unwrap()
+        else {
+            panic!("a slab is a multipole")
+        };
+        for t in multipole.total_transmittance() {
+            assert!((0.0..=1.0).contains(&t), "{t}");
+        }
     }
 }

@@ -260,6 +260,8 @@ fn invalid_camera() {
     cam("near = 0.0", "camera.near");
     cam("near = -1.0", "camera.near");
     cam("near = 2.0\nfar = 1.0", "camera.far");
+    // A far/near ratio past 1e6 leaves the 32-bit depth no precision.
+    cam("near = 1e-30", "camera.near");
     cam("fov_y_deg = 0.0", "camera.fov_y_deg");
     cam("fov_y_deg = 180.0", "camera.fov_y_deg");
     cam("up = [0.0, 0.0, 1.0]", "camera.up");

@@ -125,6 +125,14 @@ impl SceneDesc {
         )?;
         c.positive("camera.near", cam.near)?;
         c.num("camera.far", cam.far, cam.far > cam.near, "> camera.near")?;
+        // The z-buffer and linear depth are 32-bit floats: past a far/near ratio of 1e6 the
+        // depth test and the SSS depth edges lose all precision (near = 1e-30 drew garbage).
+        c.num(
+            "camera.near",
+            cam.near,
+            cam.near >= cam.far * 1e-6,
+            "at least camera.far / 1e6",
+        )?;
         let dir = Vec3::from(cam.target) - Vec3::from(cam.position);
         if dir.length_squared() == 0.0 {
             return Err(c.err("camera.target", "must differ from camera.position"));
