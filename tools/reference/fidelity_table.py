@@ -46,9 +46,13 @@ def main():
                 key = f"{sss}+{tr}"
                 img = f"references/compare/{name}--{sss}--{tr}.png"
                 out = os.path.join(ROOT, img) if (sss, tr) in KEEP_IMAGES else os.path.join(tmp, "x.png")
+                # Scenes with a shadow edge (knife-edge): the curves across it, for every method.
+                has_edge = "edge" in json.load(open(scene[:-5] + ".regions.json")) if os.path.exists(scene[:-5] + ".regions.json") else False
+                plot = f"references/compare/{name}--{sss}--{tr}.edge.png" if has_edge else None
                 r = subprocess.run(
                     [exe, "compare", os.path.join(ROOT, "references", name + ".exr"), scene,
-                     "--sss", sss, "--transmittance", tr, "--json", "--out", out],
+                     "--sss", sss, "--transmittance", tr, "--json", "--out", out]
+                    + (["--plot", os.path.join(ROOT, plot)] if plot else []),
                     capture_output=True, text=True, env=env)
                 if r.returncode != 0:
                     sys.exit(f"{name} {key}: {r.stderr.strip()}")
@@ -64,6 +68,14 @@ def main():
                     "regions_stderr": {g["name"]: g["rel_stderr"] for g in j["regions"]},
                     "image": img if (sss, tr) in KEEP_IMAGES else None,
                 }
+                if j.get("edge"):
+                    e = j["edge"]
+                    results[name][key]["edge"] = {
+                        "edge_width_mm": e["edge_width_mm"],
+                        "edge_width_mm_reference": e["edge_width_mm_reference"],
+                        "edge_width_rel_error": e["edge_width_rel_error"],
+                        "plot": plot,
+                    }
                 print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} debiased {j['rmse_debiased']} FLIP {j['flip_mean']:.4f} "
                       + " ".join(f"{g['name']} {100 * g['rel_error']:+.1f}%" for g in j["regions"]), file=sys.stderr)
     with open(os.path.join(ROOT, "references/fidelity.json"), "w") as f:
@@ -105,6 +117,23 @@ def write_markdown(results):
             lines.append(f"| `{key}` | {v['rmse']:.4f} | {opt(v.get('rmse_debiased'), '.4f')} | "
                          f"{opt(rel, '.0f')}% | {v['flip_mean']:.3f} | {regs} |")
         lines.append("")
+        if first.get("edge"):
+            lines.append("Knife edge: 10-90 % rise distance across the shadow edge, averaged along it (mm, R / G / B); "
+                         f"reference {' / '.join(f'{x:.2f}' for x in first['edge']['edge_width_mm_reference'])} mm.")
+            lines.append("")
+            lines.append("| sss + transmittance | width R | width G | width B | error R | error G | error B |")
+            lines.append("|---|---:|---:|---:|---:|---:|---:|")
+            for key, v in combos.items():
+                e = v["edge"]
+                lines.append(f"| `{key}` | " + " | ".join(f"{x:.2f}" for x in e["edge_width_mm"]) + " | "
+                             + " | ".join(f"{100 * x:+.0f}%" for x in e["edge_width_rel_error"]) + " |")
+            lines.append("")
+            lines.append("Curves across the edge (real-time solid, reference dashed), per blur:")
+            lines.append("")
+            for key, v in combos.items():
+                if key.endswith("+paper") or key == "none+off":
+                    lines.append(f"![{name} {key} edge](../{v['edge']['plot']})")
+                    lines.append("")
         for key, v in combos.items():
             if v["image"]:
                 lines.append(f"`{key}` (real-time | reference | FLIP):")

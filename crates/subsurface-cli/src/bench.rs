@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use plotters::prelude::*;
 use serde::Serialize;
+use subsurface_profile::Medium;
 use subsurface_render::{
     GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod,
 };
@@ -143,9 +144,9 @@ fn distinct_profiles(scene: &mut Scene, n: u32) {
         k += 1;
         let edit = |m: &mut subsurface_render::scene::MaterialDesc| {
             if p < names.len() {
-                m.profile = names[p].to_string();
+                m.medium = Medium::Preset(names[p].to_string());
             } else {
-                m.profile = "skin".into();
+                m.medium = Medium::default();
                 let s = 1.0 - 0.01 * p as f32;
                 m.kernel_strength = Some([0.48 * s, 0.41 * s, 0.28 * s]);
             }

@@ -1,7 +1,7 @@
 //! `subsurface kernel` and `subsurface profile`: the no-GPU side of the tool,
 //! printing blur kernels, Gaussian fits of diffusion profiles and their plots.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
 use plotters::prelude::*;
@@ -11,7 +11,7 @@ use subsurface_profile::{
     separable_range_for,
 };
 
-use crate::output::{PendingFile, is_stdout, print_summary};
+use crate::output::{PendingFile, print_summary};
 use crate::plot;
 
 /// Print the separable subsurface-scattering blur kernel (Jimenez et al. 2015).
@@ -273,7 +273,7 @@ fn describe_fit(fit: &GaussianFit) -> String {
 
 /// `subsurface profile`.
 pub fn run_profile(args: &ProfileArgs) -> Result<()> {
-    let plot = args.plot.as_deref().map(create_plot).transpose()?;
+    let plot = args.plot.as_deref().map(plot::create_plot).transpose()?;
     let m = load_material(&args.material, args.thickness)?;
     let fit = fit_material(&m, args.gaussians)?;
     // With the plot on stdout (`--plot -`), the text goes to stderr.
@@ -299,20 +299,6 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
 }
 
 /// Checks `--plot` before any work: a PNG file name (or standard output) that can be written.
-fn create_plot(path: &Path) -> Result<PendingFile> {
-    let png = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !png && !is_stdout(path) {
-        bail!(
-            "--plot: file name must end in .png (got {})",
-            path.display()
-        );
-    }
-    PendingFile::create(path).context("--plot")
-}
-
 const PLOT_SIZE: (u32, u32) = (1400, 560);
 
 /// Draws the plot and writes it; nothing is left behind if either fails.
@@ -320,13 +306,6 @@ fn write_plot(pending: PendingFile, m: &Material, fit: &GaussianFit) -> Result<(
     let img = plot::draw_image(PLOT_SIZE, |root| draw_plot(root, m, fit)).context("--plot")?;
     pending.write_png(&img).context("--plot")
 }
-
-const CHANNEL_COLORS: [RGBColor; 3] = [
-    RGBColor(220, 40, 30),
-    RGBColor(30, 160, 50),
-    RGBColor(40, 70, 220),
-];
-const CHANNEL_NAMES: [&str; 3] = ["R", "G", "B"];
 
 /// Left: R(r) and the fit on a log axis, over the fitted range. Right: T(s) of the fit.
 fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawResult {
@@ -363,14 +342,14 @@ fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawRe
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style(("sans-serif", 14))
         .draw()?;
-    for (c, color) in CHANNEL_COLORS.into_iter().enumerate() {
+    for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let channel = |v: &[[f64; 3]]| -> Vec<(f64, f64)> {
             rs.iter()
                 .zip(v)
                 .map(|(&r, v)| (r, v[c].max(y_min)))
                 .collect()
         };
-        let label = format!("{} profile", CHANNEL_NAMES[c]);
+        let label = format!("{} profile", plot::CHANNEL_NAMES[c]);
         plot::line(&mut chart, channel(&exact), color, label)?;
         plot::dashed(&mut chart, channel(&fitted), color, (8, 5))?;
     }
@@ -403,9 +382,9 @@ fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawRe
         .y_desc("T(s)")
         .label_style(("sans-serif", 14))
         .draw()?;
-    for (c, color) in CHANNEL_COLORS.into_iter().enumerate() {
+    for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let points = ss.iter().map(|&s| (s, t_profile.transmittance(s)[c]));
-        plot::line(&mut chart, points, color, CHANNEL_NAMES[c])?;
+        plot::line(&mut chart, points, color, plot::CHANNEL_NAMES[c])?;
     }
     plot::legend(&mut chart, 14)
 }
@@ -514,7 +493,7 @@ mod tests {
         let path = dir.join("skin.png");
         let m = material("skin").unwrap();
         let fit = m.fit(6).unwrap();
-        write_plot(create_plot(&path).unwrap(), &m, &fit).unwrap();
+        write_plot(plot::create_plot(&path).unwrap(), &m, &fit).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
         let img = image::open(&path).unwrap();
@@ -527,7 +506,7 @@ mod tests {
         assert_eq!(names.len(), 1, "{names:?}");
         // A missing directory fails before any work, without leaving anything behind.
         let bad = dir.join("missing").join("x.png");
-        let e = format!("{:#}", create_plot(&bad).err().unwrap());
+        let e = format!("{:#}", plot::create_plot(&bad).err().unwrap());
         assert!(
             e.starts_with("--plot: ") && e.ends_with("does not exist"),
             "{e}"
@@ -538,12 +517,16 @@ mod tests {
 
     #[test]
     fn plot_may_go_to_stdout_but_a_file_must_be_a_png() {
-        assert!(create_plot(Path::new("-")).unwrap().writes_to_stdout());
+        assert!(
+            plot::create_plot(std::path::Path::new("-"))
+                .unwrap()
+                .writes_to_stdout()
+        );
         if cfg!(target_os = "linux") {
-            let p = create_plot(Path::new("/dev/stdout")).unwrap();
+            let p = plot::create_plot(std::path::Path::new("/dev/stdout")).unwrap();
             assert!(p.writes_to_stdout());
         }
-        let e = create_plot(Path::new("plot.jpg"))
+        let e = plot::create_plot(std::path::Path::new("plot.jpg"))
             .err()
             .unwrap()
             .to_string();

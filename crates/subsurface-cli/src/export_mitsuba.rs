@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use glam::Vec3;
-use subsurface_profile::{JENSEN2001_ETA, JENSEN2001_MATERIALS, MeasuredMaterial};
+use subsurface_profile::{Dipole, Medium};
 use subsurface_render::Scene;
 use subsurface_render::scene::{LightKind, Object};
 
@@ -56,37 +56,26 @@ pub struct ExportArgs {
     pub max_depth: u32,
 }
 
-/// The measured medium used for a profile preset name, and whether it was substituted.
-pub fn medium_for_profile(profile: &str) -> Result<(MeasuredMaterial, bool)> {
-    let key: String = profile
-        .chars()
-        .filter(|c| c.is_ascii_alphanumeric())
-        .map(|c| c.to_ascii_lowercase())
-        .collect();
-    // d'Eon's "skin" is a sum of Gaussians fitted to a three-layer model, not a measured
-    // medium: Jensen's first skin sample is the nearest measured stand-in.
-    let (lookup, substituted) = if key == "skin" {
-        ("skin1", true)
-    } else {
-        (key.as_str(), false)
-    };
-    JENSEN2001_MATERIALS
-        .iter()
-        .find(|m| m.name == lookup)
-        .map(|m| (*m, substituted))
-        .with_context(|| {
-            format!(
-                "profile {profile:?}: no measured coefficients (known: skin, {})",
-                JENSEN2001_MATERIALS.map(|m| m.name).join(", ")
-            )
-        })
+/// The homogeneous medium a material's `medium` stands for, and whether it was substituted:
+/// a measured preset or coefficients are exported exactly; d'Eon's "skin" Gaussians are a fit
+/// to three layers, not one medium, so Jensen's first skin sample stands in for them.
+pub fn exported_medium(medium: &Medium) -> Result<(Dipole, bool)> {
+    Ok(match medium.dipole()? {
+        Some(d) => (d, false),
+        None => (
+            Medium::Preset("skin1".into())
+                .dipole()?
+                .context("skin1 is a measured preset")?,
+            true,
+        ),
+    })
 }
 
 /// Medium coefficients in 1/scene-unit. Our objects are `mm_per_unit` mm per mesh unit, scaled
 /// by the transform's `s` into the world, and `sss_width` widens the profile: one scene unit
 /// is `mm_per_unit / (s * sss_width)` "profile millimetres" (the inverse of the renderer's
 /// `world_per_mm`).
-pub fn medium_per_unit(m: &MeasuredMaterial, object: &Object) -> ([f64; 3], [f64; 3]) {
+pub fn medium_per_unit(m: &Dipole, object: &Object) -> ([f64; 3], [f64; 3]) {
     let s = f64::from(object.transform.determinant().abs().cbrt());
     let mm_per_scene_unit =
         f64::from(object.mm_per_unit) / (s * f64::from(object.material.sss_width));
@@ -286,12 +275,18 @@ pub fn scene_xml(
             ply_name(i, o)
         )?;
         if m.sss_strength > 0.0 {
-            let (mm, substituted) = medium_for_profile(&m.profile)
-                .with_context(|| format!("objects[{i}].material.profile"))?;
+            let (mm, substituted) = exported_medium(&m.medium)
+                .with_context(|| format!("objects[{i}].material.medium"))?;
             if substituted {
                 warnings.push(format!(
-                    "objects[{i}] ({}): profile \"{}\" (d'Eon's Gaussians) exported as Jensen 2001 \"skin1\"",
-                    o.name, m.profile
+                    "objects[{i}] ({}): medium \"{}\" (d'Eon's Gaussians) has no single medium; exported as Jensen 2001 \"skin1\"",
+                    o.name, m.medium
+                ));
+            } else if m.albedo != [1.0; 3] {
+                // The real-time colour is albedo x R_d; the path tracer's is R_d alone.
+                warnings.push(format!(
+                    "objects[{i}] ({}): albedo {:?} is not exported (the medium's own R_d is)",
+                    o.name, m.albedo
                 ));
             }
             if m.sss_strength < 1.0 {
@@ -315,14 +310,14 @@ pub fn scene_xml(
                  <medium type=\"homogeneous\" name=\"interior\">\n      \
                  <rgb name=\"albedo\" value=\"{}\"/>\n      <rgb name=\"sigma_t\" value=\"{}\"/>\n      \
                  <float name=\"scale\" value=\"{:.9}\"/>\n      <phase type=\"isotropic\"/>\n    </medium>",
-                mm.name,
+                m.medium.to_string().replace("--", "- -"),
                 mm.sigma_a,
                 mm.sigma_s_prime,
-                JENSEN2001_ETA,
+                mm.eta,
                 rgb(sa),
                 rgb(ss),
                 m.roughness,
-                JENSEN2001_ETA,
+                mm.eta,
                 rgb(albedo),
                 rgb(st.map(|s| s / scale)),
                 scale

@@ -2,11 +2,15 @@
 
 use std::sync::Once;
 
-use anyhow::{Result, anyhow};
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::Ranged;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+
+use crate::output::{PendingFile, is_stdout};
 
 /// Bundled so plot text renders the same everywhere (Bitstream Vera licence,
 /// see assets/fonts/DejaVuSans-LICENSE.txt).
@@ -101,4 +105,28 @@ where
         .border_style(BLACK)
         .draw()?;
     Ok(())
+}
+
+/// The line colours of the red, green and blue channels.
+pub const CHANNEL_COLORS: [RGBColor; 3] = [
+    RGBColor(220, 40, 30),
+    RGBColor(30, 160, 50),
+    RGBColor(40, 70, 220),
+];
+pub const CHANNEL_NAMES: [&str; 3] = ["R", "G", "B"];
+
+/// The output of `--plot`: a PNG file (created now, so that a bad path fails before any work)
+/// or `-` for standard output.
+pub fn create_plot(path: &Path) -> Result<PendingFile> {
+    let png = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !png && !is_stdout(path) {
+        bail!(
+            "--plot: file name must end in .png (got {})",
+            path.display()
+        );
+    }
+    PendingFile::create(path).context("--plot")
 }

@@ -86,8 +86,12 @@ fn export_writes_the_medium_in_scene_units() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // "skin" is exported as Jensen's skin1, and says so.
-    assert!(String::from_utf8_lossy(&o.stderr).contains("skin1"));
+    // The canonical scenes name the path tracer's medium: exported as it is, no substitution.
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("no single medium"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let xml = std::fs::read_to_string(out.join("scene.xml")).unwrap();
     // skin1: sigma_t = 0.48 + 1.01 = 1.49 /mm in blue, the largest; metres: x 1000.
     assert!(
@@ -100,6 +104,54 @@ fn export_writes_the_medium_in_scene_units() {
     assert!(xml.contains("6.283185"), "{xml}");
     let ply = std::fs::read(out.join("meshes/00-wedge.ply")).unwrap();
     assert!(ply.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
+
+    // A medium given by its coefficients is written exactly (eta included); d'Eon's "skin"
+    // Gaussians are no single medium: exported as skin1, and the exporter says so.
+    let wedge =
+        std::fs::read_to_string(root().join("scenes/canonical/wedge-backlit.toml")).unwrap();
+    for (medium, want_xml, want_stderr) in [
+        (
+            "medium = { sigma_a = [0.01, 0.02, 0.03], sigma_s = [2.0, 2.5, 3.0], eta = 1.4 }",
+            [
+                "int_ior\" value=\"1.4\"",
+                "<float name=\"scale\" value=\"3030.0",
+            ],
+            None,
+        ),
+        (
+            "medium = \"skin\"",
+            [
+                "int_ior\" value=\"1.3\"",
+                "<float name=\"scale\" value=\"1490.0",
+            ],
+            Some("exported as Jensen 2001 \"skin1\""),
+        ),
+    ] {
+        let scene = out.join("medium.toml");
+        std::fs::write(&scene, wedge.replace("medium = \"skin1\"", medium)).unwrap();
+        let dir = out.join("medium");
+        let o = bin()
+            .arg("export-mitsuba")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&dir)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+        for w in want_xml {
+            assert!(xml.contains(w), "{medium}: no {w} in {xml}");
+        }
+        assert_eq!(
+            stderr.contains("no single medium"),
+            want_stderr.is_some(),
+            "{stderr}"
+        );
+        if let Some(w) = want_stderr {
+            assert!(stderr.contains(w), "{stderr}");
+        }
+    }
     std::fs::remove_dir_all(&out).ok();
 }
 

@@ -23,6 +23,7 @@ mod gaussian;
 mod kernel;
 mod lut;
 mod materials;
+mod medium;
 pub mod oracle;
 
 pub use dipole::{DiffusionChannel, Dipole, Multipole, fresnel_diffuse_reflectance};
@@ -39,3 +40,4 @@ pub use lut::TransmittanceLut;
 pub use materials::{
     JENSEN2001_ETA, JENSEN2001_MATERIALS, Material, MeasuredMaterial, material, material_names,
 };
+pub use medium::{Coefficients, Medium};

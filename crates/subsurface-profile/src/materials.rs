@@ -118,7 +118,7 @@ impl Material {
                 let (c, z_r) = (0..3)
                     .map(|c| (c, dipole.channel(c).z_r))
                     .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-                if thickness_mm.is_finite() && thickness_mm <= z_r {
+                if thickness_mm > 0.0 && thickness_mm.is_finite() && thickness_mm <= z_r {
                     return Err(ProfileError::Invalid {
                         field: "thickness_mm".into(),
                         reason: format!(

@@ -82,7 +82,7 @@ pub fn object_uniform(
     ObjectUniform {
         model: mat(object.transform),
         normal_matrix: mat(object.transform.inverse().transpose()),
-        albedo: object.albedo,
+        albedo: std::array::from_fn(|c| object.albedo[c] * optics.diffuse_albedo[c]),
         roughness: m.roughness,
         specular: m.specular,
         sss_strength: m.sss_strength,
@@ -205,14 +205,12 @@ pub fn upload_objects(
             contents: bytemuck::cast_slice(&object.mesh.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let optics = materials.get(
-            &object.material.profile,
-            &format!("{label}.material.profile"),
-        )?;
-        if !luts.contains_key(&object.material.profile) {
-            luts.insert(object.material.profile.clone(), lut_texture(ctx, &optics)?);
+        let optics = materials.get(&object.material.medium, &format!("{label}.material.medium"))?;
+        let key = object.material.medium.to_string();
+        if !luts.contains_key(&key) {
+            luts.insert(key.clone(), lut_texture(ctx, &optics)?);
         }
-        let (lut, lut_range) = &luts[&object.material.profile];
+        let (lut, lut_range) = &luts[&key];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&label),
             contents: bytemuck::bytes_of(&object_uniform(

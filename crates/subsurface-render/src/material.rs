@@ -3,7 +3,9 @@
 
 use std::collections::HashMap;
 
-use subsurface_profile::{Dipole, KernelParams, Material, ScreenKernels, SumOfGaussians, material};
+use subsurface_profile::{
+    Dipole, KernelParams, Material, Medium, ScreenKernels, SumOfGaussians, material,
+};
 
 use crate::error::RenderError;
 use crate::scene::{MaterialDesc, Scene};
@@ -18,6 +20,10 @@ pub struct MaterialOptics {
     pub dipole: Dipole,
     /// The preset is d'Eon's skin Gaussians, for which the papers' own kernels exist.
     pub is_skin_preset: bool,
+    /// What the material's albedo (and colour texture) multiplies: the medium's total
+    /// diffuse reflectance R_d for a measured medium, so that the real-time colour is the
+    /// path-traced medium's; 1 for the Gaussian skin preset, whose weights carry no colour.
+    pub diffuse_albedo: [f32; 3],
 }
 
 /// Jensen et al. 2001's skin1 (sigma_a, sigma_s' in 1/mm, eta), what the Gaussian skin preset
@@ -36,11 +42,14 @@ pub struct MaterialCache {
 }
 
 impl MaterialCache {
-    pub fn get(&mut self, name: &str, field: &str) -> Result<MaterialOptics, RenderError> {
-        if let Some(m) = self.cache.get(name) {
+    pub fn get(&mut self, medium: &Medium, field: &str) -> Result<MaterialOptics, RenderError> {
+        let key = medium.to_string();
+        if let Some(m) = self.cache.get(&key) {
             return Ok(m.clone());
         }
-        let m = material(name).map_err(|e| RenderError::invalid(field, e.to_string()))?;
+        let m = medium
+            .material()
+            .map_err(|e| RenderError::invalid(field, e.to_string()))?;
         let optics = match &m {
             Material::Gaussians { profile, .. } => {
                 let dipole = skin1();
@@ -50,6 +59,7 @@ impl MaterialCache {
                         .map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32),
                     dipole,
                     is_skin_preset: true,
+                    diffuse_albedo: [1.0; 3],
                 }
             }
             Material::Dipole { dipole, .. }
@@ -67,10 +77,11 @@ impl MaterialCache {
                     sigma_t,
                     dipole: *dipole,
                     is_skin_preset: false,
+                    diffuse_albedo: dipole.total_reflectance().map(|r| r as f32),
                 }
             }
         };
-        self.cache.insert(name.to_string(), optics.clone());
+        self.cache.insert(key, optics.clone());
         Ok(optics)
     }
 }
@@ -123,11 +134,11 @@ impl ProfileTable {
                 object_rows.push(0);
                 continue;
             }
-            let field = format!("objects[{i}].material.profile");
-            let optics = cache.get(&m.profile, &field)?;
+            let field = format!("objects[{i}].material.medium");
+            let optics = cache.get(&m.medium, &field)?;
             let (s, f) = m.kernel_params(optics.is_skin_preset);
             let key = (
-                m.profile.clone(),
+                m.medium.to_string(),
                 [s[0], s[1], s[2], f[0], f[1], f[2]].map(f32::to_bits),
             );
             let row = match keys.iter().position(|k| *k == key) {

@@ -267,7 +267,7 @@ impl Renderer {
             material_names: scene
                 .objects
                 .iter()
-                .map(|o| o.material.profile.clone())
+                .map(|o| o.material.medium.to_string())
                 .collect(),
             profiles,
             maps_layout,
@@ -293,7 +293,7 @@ impl Renderer {
         let names: Vec<String> = scene
             .objects
             .iter()
-            .map(|o| o.material.profile.clone())
+            .map(|o| o.material.medium.to_string())
             .collect();
         let profiles = profile_table(scene, options)?;
         let new_profiles = profiles.kernels != self.profiles.kernels;
@@ -315,12 +315,15 @@ impl Renderer {
                     continue;
                 }
                 let Some(g) = gpu.next() else { break };
-                let optics = cache.get(
-                    &o.material.profile,
-                    &format!("objects[{i}].material.profile"),
-                )?;
+                let optics =
+                    cache.get(&o.material.medium, &format!("objects[{i}].material.medium"))?;
                 let row = profiles.object_rows[i];
-                let u = gpu_scene::object_uniform(o, &optics, 6.0, row);
+                let u = gpu_scene::object_uniform(
+                    o,
+                    &optics,
+                    subsurface_profile::TransmittanceLut::DEFAULT_S_MAX_MM,
+                    row,
+                );
                 queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
             }
         }

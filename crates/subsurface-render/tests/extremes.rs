@@ -34,7 +34,7 @@ material = { albedo = [0.75, 0.5, 0.4] }
 [[objects]]
 mesh = { shape = "slab", width = 0.05, height = 0.05, thickness = 0.003 }
 translation = [0.05, 0.0, 0.0]
-material = { albedo = [0.8, 0.8, 0.8], profile = "marble" }
+material = { albedo = [0.8, 0.8, 0.8], medium = "marble" }
 "#;
 
 /// Edits of the base scene, each at a documented extreme: by the line they follow, the

@@ -100,16 +100,16 @@ ambient = [0.02, 0.02, 0.02]
 name = "skin"
 mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
 translation = [-0.045, 0.0, 0.0]
-material = {{ albedo = [0.75, 0.5, 0.4], profile = "skin" }}
+material = {{ albedo = [0.75, 0.5, 0.4], medium = "skin" }}
 [[objects]]
 name = "marble"
 mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
-material = {{ albedo = [0.83, 0.79, 0.75], profile = "marble" }}
+material = {{ medium = "marble" }}   # colour: the medium's own R_d
 [[objects]]
 name = "ketchup"
 mesh = {{ shape = "slab", width = 0.04, height = 0.06, thickness = 0.02 }}
 translation = [0.045, 0.0, 0.0]
-material = {{ albedo = [0.16, 0.01, 0.0], profile = "ketchup" }}
+material = {{ medium = "ketchup" }}
 "#,
         camera = camera_toml(0.25, 30.0, "near = 0.05\nfar = 2.0"),
     )

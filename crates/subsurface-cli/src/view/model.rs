@@ -348,7 +348,7 @@ fn copy_changed(before: &MaterialDesc, after: &MaterialDesc, dst: &mut MaterialD
         sss_strength,
         sss_width,
         translucency,
-        profile,
+        medium,
         kernel_strength,
         falloff
     );

@@ -260,7 +260,7 @@ mod tests {
         let m = &mut d.objects[0].material;
         m.sss_width = 1.7;
         m.translucency = 2.5;
-        m.profile = "marble".into();
+        m.medium = subsurface_profile::Medium::Preset("marble".into());
         m.kernel_strength = Some([0.5, 0.3, 0.2]);
         m.falloff = Some([0.9, 0.4, 0.35]);
         s

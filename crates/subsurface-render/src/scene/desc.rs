@@ -3,7 +3,7 @@
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use subsurface_profile::{DEFAULT_FALLOFF, DEFAULT_STRENGTH};
+use subsurface_profile::{DEFAULT_FALLOFF, DEFAULT_STRENGTH, Medium};
 
 use crate::settings::RenderSettings;
 
@@ -393,8 +393,13 @@ pub struct MaterialDesc {
     pub sss_width: f32,
     /// Thickness scale for transmittance, >= 0.
     pub translucency: f32,
-    /// Material preset name of the scattering profile.
-    pub profile: String,
+    /// The scattering medium: a preset name of `subsurface profile --help` (`"skin"`, d'Eon's
+    /// three-layer Gaussians, or a measured material such as `"skin1"`) or measured
+    /// coefficients `{ sigma_a = [r, g, b], sigma_s = [r, g, b], eta = 1.3 }` (1/mm,
+    /// `sigma_s` reduced). The profile, T(s) and, for a measured medium, the diffuse albedo
+    /// are derived from it. `profile` is accepted as an older name.
+    #[serde(alias = "profile")]
+    pub medium: Medium,
     /// Separable kernel: per-channel share of the light that scatters, each in [0, 1].
     /// Unset: Jimenez's skin values (0.48, 0.41, 0.28) for the `skin` preset, 1 for a
     /// measured material (its fitted profile already holds the colour's spread).
@@ -420,7 +425,7 @@ impl Default for MaterialDesc {
             sss_strength: 1.0,
             sss_width: 1.0,
             translucency: 1.0,
-            profile: "skin".to_string(),
+            medium: Medium::default(),
             kernel_strength: None,
             falloff: None,
         }

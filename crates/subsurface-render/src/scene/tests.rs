@@ -84,7 +84,7 @@ fn minimal_scene_gets_defaults() {
         ([0.48, 0.41, 0.28], [1.0, 0.37, 0.3])
     );
     assert_eq!(m.kernel_params(false), ([1.0; 3], [1.0; 3]));
-    assert_eq!(m.profile, "skin");
+    assert_eq!(m.medium.to_string(), "skin");
 }
 
 #[test]
@@ -381,7 +381,16 @@ fn invalid_materials() {
         "objects[0].material.falloff[0]",
     );
     mat("albedo = [0.5, 0.5, -0.5]", "objects[0].material.albedo[2]");
-    mat("profile = \"\"", "objects[0].material.profile");
+    mat("profile = \"\"", "objects[0].material.medium");
+    mat("medium = \"velvet\"", "objects[0].material.medium");
+    mat(
+        "medium = { sigma_a = [0.0, 1.0, 1.0], sigma_s = [1.0, 1.0, 1.0] }",
+        "objects[0].material.medium",
+    );
+    mat(
+        "medium = { sigma_a = [1.0, 1.0, 1.0], sigma_s = [1.0, 1.0, 1.0], eta = 20.0 }",
+        "objects[0].material.medium",
+    );
     mat(
         "albedo_texture = \"\"",
         "objects[0].material.albedo_texture",

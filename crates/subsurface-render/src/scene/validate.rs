@@ -238,9 +238,11 @@ impl SceneDesc {
                 m.translucency >= 0.0,
                 ">= 0",
             )?;
-            if m.profile.trim().is_empty() {
-                return Err(c.err(f("profile"), "must not be empty"));
-            }
+            // The medium is checked here, not when the GPU scene is built: a scene that
+            // validates also loads (unknown preset, coefficient <= 0 or NaN, bad eta).
+            m.medium
+                .material()
+                .map_err(|e| c.err(f("medium"), e.to_string()))?;
             if let Some(k) = m.kernel_strength {
                 c.unit3(&f("kernel_strength"), k)?;
             }

@@ -82,7 +82,7 @@ pub fn white_object_scene(
         [objects.material]
         albedo = [1.0, 1.0, 1.0]
         specular = 0.0
-        profile = "{profile}"
+        medium = "{profile}"
         "#
     ))
 }

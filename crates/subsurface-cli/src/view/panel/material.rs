@@ -1,6 +1,7 @@
 //! The Material section: the selected object's (or every object's) material.
 
 use egui::{ComboBox, Slider, Ui};
+use subsurface_profile::Medium;
 
 use super::widgets::section;
 use crate::view::model::Model;
@@ -25,11 +26,12 @@ pub fn material(ui: &mut Ui, m: &mut Model) {
         });
         let before = m.state.desc.objects[m.ui.object].material.clone();
         let mat = &mut m.state.desc.objects[m.ui.object].material;
-        ComboBox::from_id_salt("profile")
-            .selected_text(format!("profile: {}", mat.profile))
+        ComboBox::from_id_salt("medium")
+            .selected_text(format!("medium: {}", mat.medium))
             .show_ui(ui, |ui| {
+                // Coefficients from the scene file stay selected until a preset is picked.
                 for name in subsurface_profile::material_names() {
-                    ui.selectable_value(&mut mat.profile, name.to_string(), name);
+                    ui.selectable_value(&mut mat.medium, Medium::Preset(name.to_string()), name);
                 }
             });
         ui.add(Slider::new(&mut mat.sss_strength, 0.0..=1.0).text("SSS strength"));
@@ -47,7 +49,9 @@ pub fn material(ui: &mut Ui, m: &mut Model) {
         ui.add(Slider::new(&mut mat.specular, 0.0..=1.0).text("specular"));
         // Each material has its own separable kernel; unset values show the defaults of
         // its kind of profile and become its own once moved.
-        let skin = subsurface_profile::material(&mat.profile)
+        let skin = mat
+            .medium
+            .material()
             .is_ok_and(|p| matches!(p, subsurface_profile::Material::Gaussians { .. }));
         let (mut ks, mut kf) = mat.kernel_params(skin);
         ui.label("separable kernel");

@@ -127,10 +127,7 @@ impl TextureSpacePass {
                     continue;
                 }
             };
-            let optics = cache.get(
-                &o.material.profile,
-                &format!("objects[{i}].material.profile"),
-            )?;
+            let optics = cache.get(&o.material.medium, &format!("objects[{i}].material.medium"))?;
             let kernel = BlurKernel::from_profile(&optics.profile);
             let irradiance = map_texture(
                 device,

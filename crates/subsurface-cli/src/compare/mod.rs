@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use subsurface_render::{GpuContext, RenderOptions, Renderer};
 
 use crate::output::{PendingFile, is_stdout, print_summary};
+use crate::plot;
 use crate::settings_args::{SettingsArgs, load_scene};
 
 #[derive(Args, Debug)]
@@ -34,6 +35,10 @@ pub struct CompareArgs {
     /// scene, if present].
     #[arg(long, value_name = "FILE.json")]
     pub regions: Option<PathBuf>,
+    /// Knife-edge scenes (an `edge` in the regions file): plot the curves across the edge,
+    /// real-time and reference per channel, as a PNG (`-`: standard output).
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
     /// Print the results as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -53,10 +58,14 @@ pub struct Region {
     pub rect: [f32; 4],
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RegionsFile {
+    #[serde(default)]
     regions: Vec<Region>,
+    /// A straight shadow edge to measure (the knife-edge scene).
+    #[serde(default)]
+    edge: Option<edge::EdgeSpec>,
 }
 
 #[derive(Debug, Serialize)]
@@ -96,6 +105,9 @@ pub struct Report {
     pub rel_rmse_debiased: Option<f32>,
     pub flip_mean: f32,
     pub regions: Vec<RegionResult>,
+    /// The knife-edge measurement, when the regions file names an edge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge: Option<edge::EdgeResult>,
     /// Largest difference (1/255 steps) between our CPU tone map and the GPU's frame: checks
     /// that FLIP sees what `subsurface render` writes.
     pub tonemap_check_max_diff: u8,
@@ -135,251 +147,10 @@ pub fn tone_map(linear: &[[f32; 3]], exposure_ev: f32, w: u32, h: u32) -> image:
     image::RgbImage::from_raw(w, h, px).expect("w * h pixels")
 }
 
-// ---------------------------------------------------------------- FLIP (LDR)
+// ---------------------------------------------------------------- FLIP (LDR): flip.rs
 
-/// LDR-FLIP (Andersson et al. 2020, "FLIP: A Difference Evaluator for Alternating Images"),
-/// following NVIDIA's reference implementation: CSF-filtered YCxCz colour difference
-/// (Hunt-adjusted HyAB), edge and point feature differences, default 67.02 pixels per degree.
-/// Implemented here (the nv-flip crate is only a dev-dependency); tests/fidelity.rs checks it
-/// against nv-flip.
-pub mod flip {
-    const QC: f32 = 0.7;
-    const QF: f32 = 0.5;
-    const PC: f32 = 0.4;
-    const PT: f32 = 0.95;
-    const GW: f32 = 0.082;
-    pub const PPD: f32 = 67.02;
-
-    const RGB2XYZ: [[f32; 3]; 3] = [
-        [0.412_390_8, 0.357_584_33, 0.180_480_8],
-        [0.212_639, 0.715_168_65, 0.072_192_32],
-        [0.019_330_818, 0.119_194_78, 0.950_532_15],
-    ];
-    const XYZ2RGB: [[f32; 3]; 3] = [
-        [3.240_97, -1.537_383_2, -0.498_610_76],
-        [-0.969_243_6, 1.875_967_5, 0.041_555_06],
-        [0.055_630_08, -0.203_976_96, 1.056_971_5],
-    ];
-
-    fn mul(m: &[[f32; 3]; 3], v: [f32; 3]) -> [f32; 3] {
-        std::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2])
-    }
-
-    fn white() -> [f32; 3] {
-        mul(&RGB2XYZ, [1.0; 3])
-    }
-
-    fn srgb_to_linear(c: f32) -> f32 {
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    }
-
-    fn xyz_to_ycxcz(x: [f32; 3]) -> [f32; 3] {
-        let w = white();
-        let (xx, yy, zz) = (x[0] / w[0], x[1] / w[1], x[2] / w[2]);
-        [116.0 * yy - 16.0, 500.0 * (xx - yy), 200.0 * (yy - zz)]
-    }
-
-    fn ycxcz_to_xyz(c: [f32; 3]) -> [f32; 3] {
-        let w = white();
-        let yy = (c[0] + 16.0) / 116.0;
-        [
-            (c[1] / 500.0 + yy) * w[0],
-            yy * w[1],
-            (yy - c[2] / 200.0) * w[2],
-        ]
-    }
-
-    fn xyz_to_lab(x: [f32; 3]) -> [f32; 3] {
-        let w = white();
-        let d = 6.0f32 / 29.0;
-        let f = |t: f32| {
-            if t > d * d * d {
-                t.cbrt()
-            } else {
-                t / (3.0 * d * d) + 4.0 / 29.0
-            }
-        };
-        let (fx, fy, fz) = (f(x[0] / w[0]), f(x[1] / w[1]), f(x[2] / w[2]));
-        [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
-    }
-
-    fn hunt(lab: [f32; 3]) -> [f32; 3] {
-        [lab[0], 0.01 * lab[0] * lab[1], 0.01 * lab[0] * lab[2]]
-    }
-
-    fn hyab(a: [f32; 3], b: [f32; 3]) -> f32 {
-        (a[0] - b[0]).abs() + ((a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-    }
-
-    /// Separable convolution of one channel with clamped borders.
-    fn convolve(src: &[f32], w: usize, h: usize, kx: &[f32], ky: &[f32]) -> Vec<f32> {
-        let (rx, ry) = (kx.len() / 2, ky.len() / 2);
-        let rows = convolve_1d(src, w, h, kx, |x, y, i| {
-            y * w + (x + i).saturating_sub(rx).min(w - 1)
-        });
-        convolve_1d(&rows, w, h, ky, |x, y, i| {
-            (y + i).saturating_sub(ry).min(h - 1) * w + x
-        })
-    }
-
-    /// One pass of [`convolve`]: pixel (x, y) is the sum of `k[i] * src[tap(x, y, i)]`.
-    fn convolve_1d(
-        src: &[f32],
-        w: usize,
-        h: usize,
-        k: &[f32],
-        tap: impl Fn(usize, usize, usize) -> usize,
-    ) -> Vec<f32> {
-        let mut out = vec![0.0; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let mut s = 0.0;
-                for (i, k) in k.iter().enumerate() {
-                    s += k * src[tap(x, y, i)];
-                }
-                out[y * w + x] = s;
-            }
-        }
-        out
-    }
-
-    /// The contrast sensitivity functions as sums of two Gaussians per YCxCz channel
-    /// (a1, b1, a2, b2), evaluated on the pixel grid and normalised to sum 1.
-    const CSF: [[f32; 4]; 3] = [
-        [1.0, 0.0047, 0.0, 1e-5],
-        [1.0, 0.0053, 0.0, 1e-5],
-        [34.1, 0.04, 13.5, 0.025],
-    ];
-
-    /// Filters the YCxCz channels (planar) with the CSF.
-    fn csf_filter(ycxcz: &[Vec<f32>; 3], w: usize, h: usize) -> [Vec<f32>; 3] {
-        let radius =
-            (3.0 * (0.04f32 / (2.0 * std::f32::consts::PI.powi(2))).sqrt() * PPD).ceil() as i32;
-        let dx = 1.0 / PPD;
-        let pi = std::f32::consts::PI;
-        std::array::from_fn(|c| {
-            let [a1, b1, a2, b2] = CSF[c];
-            // Each term a sqrt(pi/b) exp(-pi^2 r^2 / b) factors as e(x) e(y); the 2-D
-            // kernel's sum is sum_i a_i sqrt(pi/b_i) (sum_x e_i(x))^2.
-            let terms: Vec<(f32, Vec<f32>)> = [(a1, b1), (a2, b2)]
-                .into_iter()
-                .filter(|(a, _)| *a != 0.0)
-                .map(|(a, b)| {
-                    let e: Vec<f32> = (-radius..=radius)
-                        .map(|i| (-pi * pi * (i as f32 * dx).powi(2) / b).exp())
-                        .collect();
-                    (a * (pi / b).sqrt(), e)
-                })
-                .collect();
-            let total: f32 = terms
-                .iter()
-                .map(|(k, e)| k * e.iter().sum::<f32>().powi(2))
-                .sum();
-            let mut out = vec![0.0; w * h];
-            for (k, e) in &terms {
-                let f = convolve(&ycxcz[c], w, h, e, e);
-                for (o, v) in out.iter_mut().zip(f) {
-                    *o += k / total * v;
-                }
-            }
-            out
-        })
-    }
-
-    /// Edge (first derivative) and point (second derivative) kernels of a Gaussian, positive
-    /// and negative weights each normalised to +-1 as in the reference implementation.
-    fn feature_kernels() -> (Vec<f32>, Vec<f32>, Vec<f32>) {
-        let sd = 0.5 * GW * PPD;
-        let r = (3.0 * sd).ceil() as i32;
-        let xs: Vec<f32> = (-r..=r).map(|i| i as f32).collect();
-        let g: Vec<f32> = xs
-            .iter()
-            .map(|x| (-x * x / (2.0 * sd * sd)).exp())
-            .collect();
-        let gsum: f32 = g.iter().sum();
-        let norm = |k: Vec<f32>| {
-            let pos: f32 = k.iter().filter(|v| **v > 0.0).sum();
-            let neg: f32 = -k.iter().filter(|v| **v < 0.0).sum::<f32>();
-            k.into_iter()
-                .map(|v| {
-                    if v > 0.0 {
-                        v / pos
-                    } else if v < 0.0 {
-                        v / neg
-                    } else {
-                        0.0
-                    }
-                })
-                .collect::<Vec<f32>>()
-        };
-        let edge = norm(xs.iter().zip(&g).map(|(x, g)| -x * g).collect());
-        let point = norm(
-            xs.iter()
-                .zip(&g)
-                .map(|(x, g)| (x * x / (sd * sd) - 1.0) * g)
-                .collect(),
-        );
-        (edge, point, g.iter().map(|v| v / gsum).collect())
-    }
-
-    /// Per-pixel FLIP error of two sRGB 8-bit images of the same size.
-    pub fn flip(reference: &image::RgbImage, test: &image::RgbImage) -> Vec<f32> {
-        let (w, h) = (reference.width() as usize, reference.height() as usize);
-        let planes = |img: &image::RgbImage| -> [Vec<f32>; 3] {
-            let ycc: Vec<[f32; 3]> = img
-                .pixels()
-                .map(|p| {
-                    xyz_to_ycxcz(mul(
-                        &RGB2XYZ,
-                        p.0.map(|c| srgb_to_linear(f32::from(c) / 255.0)),
-                    ))
-                })
-                .collect();
-            std::array::from_fn(|c| ycc.iter().map(|v| v[c]).collect())
-        };
-        let (pr, pt) = (planes(reference), planes(test));
-        let (fr, ft) = (csf_filter(&pr, w, h), csf_filter(&pt, w, h));
-        let to_hunt = |f: &[Vec<f32>; 3], i: usize| {
-            let rgb =
-                mul(&XYZ2RGB, ycxcz_to_xyz([f[0][i], f[1][i], f[2][i]])).map(|v| v.clamp(0.0, 1.0));
-            hunt(xyz_to_lab(mul(&RGB2XYZ, rgb)))
-        };
-        let green = hunt(xyz_to_lab(mul(&RGB2XYZ, [0.0, 1.0, 0.0])));
-        let blue = hunt(xyz_to_lab(mul(&RGB2XYZ, [0.0, 0.0, 1.0])));
-        let cmax = hyab(green, blue).powf(QC);
-        let pccmax = PC * cmax;
-        // Features on the achromatic channel, L* scaled to 0..1.
-        let (edge, point, g) = feature_kernels();
-        let features = |p: &[Vec<f32>; 3]| {
-            let grey: Vec<f32> = p[0].iter().map(|y| (y + 16.0) / 116.0).collect();
-            let ex = convolve(&grey, w, h, &edge, &g);
-            let ey = convolve(&grey, w, h, &g, &edge);
-            let px = convolve(&grey, w, h, &point, &g);
-            let py = convolve(&grey, w, h, &g, &point);
-            let e: Vec<f32> = ex.iter().zip(&ey).map(|(a, b)| a.hypot(*b)).collect();
-            let q: Vec<f32> = px.iter().zip(&py).map(|(a, b)| a.hypot(*b)).collect();
-            (e, q)
-        };
-        let ((er, qr), (et, qt)) = (features(&pr), features(&pt));
-        (0..w * h)
-            .map(|i| {
-                let dc = hyab(to_hunt(&fr, i), to_hunt(&ft, i)).powf(QC);
-                let ec = if dc < pccmax {
-                    PT / pccmax * dc
-                } else {
-                    PT + (dc - pccmax) / (cmax - pccmax) * (1.0 - PT)
-                };
-                let df = (er[i] - et[i]).abs().max((qr[i] - qt[i]).abs());
-                let ef = (df / std::f32::consts::SQRT_2).powf(QF);
-                ec.powf(1.0 - ef)
-            })
-            .collect()
-    }
-}
+pub mod edge;
+pub mod flip;
 
 // ---------------------------------------------------------------- comparison
 
@@ -443,31 +214,35 @@ fn crate_one_line(s: &str) -> String {
         .join("; ")
 }
 
-fn load_regions(args: &CompareArgs) -> Result<Vec<Region>> {
+fn load_regions(args: &CompareArgs) -> Result<RegionsFile> {
     let path = match (&args.regions, &args.scene) {
         (Some(p), _) => p.clone(),
         (None, Some(s)) => {
             let p = s.with_extension("regions.json");
             if !p.is_file() {
-                return Ok(Vec::new());
+                return Ok(RegionsFile::default());
             }
             p
         }
-        (None, None) => return Ok(Vec::new()),
+        (None, None) => return Ok(RegionsFile::default()),
     };
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let f: RegionsFile =
         serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    for (i, r) in f.regions.iter().enumerate() {
-        let [x0, y0, x1, y1] = r.rect;
+    let rects = f
+        .regions
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (format!("regions[{i}]"), r.rect));
+    for (name, [x0, y0, x1, y1]) in rects.chain(f.edge.iter().map(|e| ("edge".into(), e.rect))) {
         anyhow::ensure!(
-            r.rect.iter().all(|v| (0.0..=1.0).contains(v)) && x0 < x1 && y0 < y1,
-            "{}: regions[{i}].rect: must be [x0, y0, x1, y1] in 0..=1 with x0 < x1, y0 < y1",
+            [x0, y0, x1, y1].iter().all(|v| (0.0..=1.0).contains(v)) && x0 < x1 && y0 < y1,
+            "{}: {name}.rect: must be [x0, y0, x1, y1] in 0..=1 with x0 < x1, y0 < y1",
             path.display()
         );
     }
-    Ok(f.regions)
+    Ok(f)
 }
 
 /// Hot colour map for the error image: black, red, yellow, white.
@@ -480,7 +255,10 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     // Check the inputs before the (slow) render and before creating the output.
     let (rw, rh, reference) = read_reference(&args.reference)?;
     let stderr = read_stderr(&args.reference, rw, rh)?;
-    let regions = load_regions(args)?;
+    let RegionsFile {
+        regions,
+        edge: edge_spec,
+    } = load_regions(args)?;
     let mut scene = load_scene(args.scene.as_ref(), None)?;
     args.settings.apply(&mut scene)?;
     let opts = RenderOptions::from_scene(&scene);
@@ -491,6 +269,15 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         opts.width(),
         opts.height()
     );
+    anyhow::ensure!(
+        args.plot.is_none() || edge_spec.is_some(),
+        "--plot: the regions file names no edge to plot"
+    );
+    anyhow::ensure!(
+        !(is_stdout(&args.out) && args.plot.as_deref().is_some_and(is_stdout)),
+        "--plot: --out is standard output already"
+    );
+    let plot_file = args.plot.as_deref().map(plot::create_plot).transpose()?;
     let pending = PendingFile::create(&args.out)?;
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene, opts.clone())?;
@@ -581,6 +368,9 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         anyhow::bail!("region {:?}: no skin pixels in its rectangle", r.name);
     }
 
+    let edge = edge_spec
+        .map(|spec| edge::measure(&ours, &reference, w, h, &spec, mm_per_pixel(&scene, h)));
+
     // FLIP on the tone-mapped images.
     let ours_ldr = tone_map(&ours, opts.settings.exposure_ev, w, h);
     let ref_ldr = tone_map(&reference, opts.settings.exposure_ev, w, h);
@@ -603,6 +393,23 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         }
     }
     pending.write_png(&side)?;
+    if let (Some(file), Some(e)) = (plot_file, &edge) {
+        let title = format!(
+            "{}: {} + {}",
+            args.scene
+                .as_ref()
+                .map_or("default scene".into(), |p| p.display().to_string()),
+            serde_json::to_value(opts.settings.sss.method)?
+                .as_str()
+                .unwrap_or("?"),
+            serde_json::to_value(opts.settings.transmittance.method)?
+                .as_str()
+                .unwrap_or("?"),
+        );
+        let img =
+            plot::draw_image((900, 560), |root| edge::draw(root, e, &title)).context("--plot")?;
+        file.write_png(&img).context("--plot")?;
+    }
 
     Ok(Report {
         reference: args.reference.display().to_string(),
@@ -621,9 +428,25 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         rel_rmse_debiased: rmse_debiased.map(|v| (v / ref_mean.max(1e-12)) as f32),
         flip_mean: flip_mean as f32,
         regions: region_results,
+        edge,
         tonemap_check_max_diff: check,
         out: args.out.display().to_string(),
     })
+}
+
+/// Millimetres of skin per pixel in the plane through the camera's target, square to the view:
+/// the image height there is 2 d tan(fov / 2) scene units, and the first scattering object
+/// says how many scene units its profile millimetre is.
+fn mm_per_pixel(scene: &subsurface_render::Scene, h: u32) -> f32 {
+    let cam = &scene.desc.camera;
+    let d = (glam::Vec3::from(cam.target) - glam::Vec3::from(cam.position)).length();
+    let world = 2.0 * d * (cam.fov_y_deg.to_radians() / 2.0).tan() / h as f32;
+    let per_mm = scene
+        .objects
+        .iter()
+        .find(|o| o.material.sss_strength > 0.0)
+        .map_or(1.0, subsurface_render::gpu_scene::world_per_mm);
+    world / per_mm
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
@@ -650,8 +473,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             }
             _ => String::new(),
         };
+        let edge = r.edge.as_ref().map_or(String::new(), |e| {
+            let f = |v: [f32; 3]| format!("{:.2}/{:.2}/{:.2}", v[0], v[1], v[2]);
+            format!(
+                ", edge width (10-90 %, R/G/B mm) {} vs reference {}",
+                f(e.edge_width_mm),
+                f(e.edge_width_mm_reference)
+            )
+        });
         format!(
-            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}; wrote {}",
+            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}{edge}; wrote {}",
             r.scene,
             r.reference,
             r.sss.as_str().unwrap_or("?"),
@@ -664,6 +495,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         )
     };
     // With the image on stdout (`--out -`), the report goes to stderr.
-    print_summary(is_stdout(&args.out), &format!("{text}\n"));
+    let stdout_taken = is_stdout(&args.out) || args.plot.as_deref().is_some_and(is_stdout);
+    print_summary(stdout_taken, &format!("{text}\n"));
     Ok(())
 }

@@ -1,0 +1,168 @@
+//! A scattering medium as a scene names it: a preset (d'Eon's skin Gaussians or one of
+//! Jensen et al. 2001's measured materials) or its own measured coefficients. Everything
+//! else a material needs, the Gaussian-sum profile, T(s) and the diffuse albedo R_d, is
+//! derived from it, so the real-time side and the path tracer render the same material.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::dipole::Dipole;
+use crate::error::{CHANNELS, Result, positive};
+use crate::materials::{JENSEN2001_ETA, Material, material};
+
+/// `medium = "skin1"` or `medium = { sigma_a = [..], sigma_s = [..], eta = 1.3 }` in a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Medium {
+    /// A preset of [`crate::material_names`].
+    Preset(String),
+    /// Measured coefficients.
+    Coefficients(Coefficients),
+}
+
+/// A homogeneous medium's optical coefficients, per millimetre, red/green/blue.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Coefficients {
+    /// Absorption coefficient sigma_a, 1/mm, each > 0.
+    pub sigma_a: [f64; 3],
+    /// Reduced scattering coefficient sigma_s' = sigma_s (1 - g), 1/mm, each > 0.
+    pub sigma_s: [f64; 3],
+    /// Relative index of refraction of the boundary, in 1..=10 (default 1.3, Jensen 2001's).
+    #[serde(default = "default_eta")]
+    pub eta: f64,
+}
+
+fn default_eta() -> f64 {
+    JENSEN2001_ETA
+}
+
+impl Default for Medium {
+    fn default() -> Self {
+        Medium::Preset("skin".into())
+    }
+}
+
+impl fmt::Display for Medium {
+    /// The preset's name, or the coefficients in the scene's syntax: also the key under
+    /// which a renderer caches the derived profile.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Medium::Preset(name) => f.write_str(name),
+            Medium::Coefficients(c) => write!(
+                f,
+                "{{ sigma_a = {:?}, sigma_s = {:?}, eta = {} }}",
+                c.sigma_a, c.sigma_s, c.eta
+            ),
+        }
+    }
+}
+
+impl Medium {
+    /// The material: a preset looked up by name, coefficients validated (each finite and
+    /// > 0, eta in 1..=10) into a dipole whose fitted Gaussians give the profile and T(s).
+    pub fn material(&self) -> Result<Material> {
+        match self {
+            Medium::Preset(name) => material(name),
+            Medium::Coefficients(c) => {
+                // The scene's names (sigma_s, not the dipole's sigma_s_prime) in the errors.
+                for ch in 0..3 {
+                    positive(&format!("sigma_a.{}", CHANNELS[ch]), c.sigma_a[ch])?;
+                    positive(&format!("sigma_s.{}", CHANNELS[ch]), c.sigma_s[ch])?;
+                }
+                Ok(Material::Dipole {
+                    name: self.to_string(),
+                    dipole: Dipole::new(c.sigma_a, c.sigma_s, c.eta)?,
+                })
+            }
+        }
+    }
+
+    /// The measured coefficients behind the medium, when it has one: d'Eon's three-layer
+    /// skin Gaussians are a fit to several layers, not one homogeneous medium.
+    pub fn dipole(&self) -> Result<Option<Dipole>> {
+        Ok(match self.material()? {
+            Material::Gaussians { .. } => None,
+            Material::Dipole { dipole, .. } => Some(dipole),
+            Material::Multipole { multipole, .. } => Some(multipole.dipole),
+        })
+    }
+
+    /// Total diffuse reflectance R_d of a semi-infinite block of the medium (Jensen 2001's
+    /// closed form): the colour it shows under uniform light. None for the Gaussian preset,
+    /// whose weights are normalised and carry no colour.
+    pub fn diffuse_albedo(&self) -> Result<Option<[f64; 3]>> {
+        Ok(self.dipole()?.map(|d| d.total_reflectance()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Deserialize)]
+    struct M {
+        medium: Medium,
+    }
+
+    fn parse(s: &str) -> std::result::Result<Medium, String> {
+        serde_json::from_str::<M>(s)
+            .map(|m| m.medium)
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_preset_and_its_coefficients_are_the_same_material() {
+        let preset = parse(r#"{"medium": "skin1"}"#).unwrap();
+        let coeffs =
+            parse(r#"{"medium": {"sigma_a": [0.032, 0.17, 0.48], "sigma_s": [0.74, 0.88, 1.01]}}"#)
+                .unwrap();
+        assert_eq!(preset.dipole().unwrap(), coeffs.dipole().unwrap());
+        // Jensen 2001's skin1 reflects mostly red: R_d from the dipole's closed form.
+        let rd = coeffs.diffuse_albedo().unwrap().unwrap();
+        assert!(
+            (rd[0] - 0.436).abs() < 2e-3 && (rd[2] - 0.131).abs() < 2e-3,
+            "{rd:?}"
+        );
+        assert!(coeffs.to_string().starts_with("{ sigma_a = [0.032"));
+    }
+
+    #[test]
+    fn the_gaussian_skin_preset_has_no_single_medium() {
+        let skin = Medium::default();
+        assert_eq!(skin.to_string(), "skin");
+        assert_eq!(skin.dipole().unwrap(), None);
+        assert_eq!(skin.diffuse_albedo().unwrap(), None);
+    }
+
+    #[test]
+    fn bad_coefficients_name_the_field() {
+        for (json, field) in [
+            (
+                r#"{"sigma_a": [0.0, 1, 1], "sigma_s": [1, 1, 1]}"#,
+                "sigma_a.r",
+            ),
+            (
+                r#"{"sigma_a": [1, 1, 1], "sigma_s": [1, -1, 1]}"#,
+                "sigma_s.g",
+            ),
+            (
+                r#"{"sigma_a": [1, 1, 1], "sigma_s": [1, 1, 1], "eta": 0.5}"#,
+                "eta",
+            ),
+        ] {
+            let m = parse(&format!(r#"{{"medium": {json}}}"#)).unwrap();
+            let e = m.material().unwrap_err().to_string();
+            assert!(e.starts_with(field), "{e}");
+        }
+        assert!(parse(r#"{"medium": {"sigma_a": [1, 1, 1]}}"#).is_err());
+        assert!(
+            Medium::Preset("velvet".into())
+                .material()
+                .unwrap_err()
+                .to_string()
+                .contains("skin1")
+        );
+    }
+}
