@@ -24,8 +24,8 @@ from make_references import subsurface_bin  # noqa: E402
 
 # Every screen-space method with the default transmittance, every transmittance method with
 # the default blur, and the baseline without either.
-COMBOS = [("none", "off")] + [(s, "paper") for s in ("none", "gaussian6", "separable", "hable13")] + [
-    ("separable", t) for t in ("off", "beer", "seed-report", "diffusion")
+COMBOS = [("none", "off")] + [(s, "diffusion") for s in ("none", "gaussian6", "separable", "hable13")] + [
+    ("separable", t) for t in ("off", "paper", "beer", "seed-report")
 ]
 # Side-by-side images kept in the repository (the others go to a temporary directory).
 KEEP_IMAGES = {("none", "off"), ("separable", "paper"), ("separable", "diffusion")}
@@ -47,8 +47,9 @@ def main():
                 img = f"references/compare/{name}--{sss}--{tr}.png"
                 out = os.path.join(ROOT, img) if (sss, tr) in KEEP_IMAGES else os.path.join(tmp, "x.png")
                 # Scenes with a shadow edge (knife-edge): the curves across it, for every method.
-                has_edge = "edge" in json.load(open(scene[:-5] + ".regions.json")) if os.path.exists(scene[:-5] + ".regions.json") else False
-                plot = f"references/compare/{name}--{sss}--{tr}.edge.png" if has_edge else None
+                spec = json.load(open(scene[:-5] + ".regions.json")) if os.path.exists(scene[:-5] + ".regions.json") else {}
+                kind = "edge" if "edge" in spec else "thickness" if "thickness" in spec else None
+                plot = f"references/compare/{name}--{sss}--{tr}.{kind}.png" if kind else None
                 r = subprocess.run(
                     [exe, "compare", os.path.join(ROOT, "references", name + ".exr"), scene,
                      "--sss", sss, "--transmittance", tr, "--json", "--out", out]
@@ -74,6 +75,13 @@ def main():
                         "edge_width_mm": e["edge_width_mm"],
                         "edge_width_mm_reference": e["edge_width_mm_reference"],
                         "edge_width_rel_error": e["edge_width_rel_error"],
+                        "plot": plot,
+                    }
+                if j.get("thickness"):
+                    t = j["thickness"]
+                    results[name][key]["thickness"] = {
+                        "max_abs_rel_error": t["max_abs_rel_error"],
+                        "curve": [[b["thickness_mm"], b["rel_error"], b["significant"]] for b in t["bins"]],
                         "plot": plot,
                     }
                 print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} debiased {j['rmse_debiased']} FLIP {j['flip_mean']:.4f} "
@@ -131,8 +139,23 @@ def write_markdown(results):
             lines.append("Curves across the edge (real-time solid, reference dashed), per blur:")
             lines.append("")
             for key, v in combos.items():
-                if key.endswith("+paper") or key == "none+off":
+                if key.endswith("+diffusion") or key == "none+off":
                     lines.append(f"![{name} {key} edge](../{v['edge']['plot']})")
+                    lines.append("")
+        if first.get("thickness"):
+            lines.append("Against thickness (pixels binned by the thickness the light crosses, 1 mm bins): worst "
+                         "relative error per channel where the reference exceeds 1 % of its thinnest bin.")
+            lines.append("")
+            lines.append("| sss + transmittance | worst R | worst G | worst B |")
+            lines.append("|---|---:|---:|---:|")
+            for key, v in combos.items():
+                lines.append(f"| `{key}` | " + " | ".join(f"{100 * x:.0f}%" for x in v["thickness"]["max_abs_rel_error"]) + " |")
+            lines.append("")
+            lines.append("Mean radiance against thickness (real-time solid, reference dashed):")
+            lines.append("")
+            for key, v in combos.items():
+                if key.endswith("+diffusion") or key in ("none+off", "separable+paper"):
+                    lines.append(f"![{name} {key} thickness](../{v['thickness']['plot']})")
                     lines.append("")
         for key, v in combos.items():
             if v["image"]:

@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use subsurface_profile::{
     DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GaussianFit, KernelParams, Material,
     ProfileError, SumOfGaussians, material, separable_kernel, separable_kernel_for,
-    separable_range_for,
+    separable_kernel_projected, separable_range_for, separable_range_projected,
 };
 
 use crate::output::{PendingFile, print_summary};
@@ -150,9 +150,16 @@ pub fn build_kernel(args: &KernelArgs) -> Result<Vec<[f32; 4]>> {
     match &args.material {
         None => separable_kernel(&params).map_err(flag_error),
         Some(name) => {
-            let fit = fit_material(&load_material(name, None)?, args.gaussians)?;
-            let range = separable_range_for(&fit.profile, args.samples);
-            separable_kernel_for(&fit.profile, &params, range).map_err(flag_error)
+            let material = load_material(name, None)?;
+            let fit = fit_material(&material, args.gaussians)?;
+            // As the renderer builds it: measured materials take the profile's projection.
+            if matches!(material, Material::Gaussians { .. }) {
+                let range = separable_range_for(&fit.profile, args.samples);
+                separable_kernel_for(&fit.profile, &params, range).map_err(flag_error)
+            } else {
+                let range = separable_range_projected(&fit.profile, args.samples);
+                separable_kernel_projected(&fit.profile, &params, range).map_err(flag_error)
+            }
         }
     }
 }

@@ -25,6 +25,7 @@ mod lut;
 mod materials;
 mod medium;
 pub mod oracle;
+mod slab;
 
 pub use dipole::{DiffusionChannel, Dipole, Multipole, fresnel_diffuse_reflectance};
 pub use error::{ProfileError, Result};
@@ -33,11 +34,12 @@ pub use gaussian::{GaussianTerm, SKIN_VARIANCES_MM2, SKIN_WEIGHTS, SumOfGaussian
 pub use kernel::{
     DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS,
     HABLE13_TAPS, KernelParams, SCREEN_GAUSSIANS, ScreenKernels, gaussian_table, hable13_for,
-    hable13_kernel, separable_kernel, separable_kernel_for, separable_range_for,
-    separable_range_mm,
+    hable13_kernel, separable_kernel, separable_kernel_for, separable_kernel_projected,
+    separable_range_for, separable_range_mm, separable_range_projected,
 };
 pub use lut::TransmittanceLut;
 pub use materials::{
     JENSEN2001_ETA, JENSEN2001_MATERIALS, Material, MeasuredMaterial, material, material_names,
 };
 pub use medium::{Coefficients, Medium};
+pub use slab::{SlabTransmittance, slab_radiance};

@@ -304,6 +304,9 @@ fn head_seams_are_not_dark() {
     let measure = |padding: u32| {
         let mut opts = texture_options(&scene, padding);
         opts.settings.sss.texture_size = 512;
+        // The seams alone: light through the ear (the back light) changes faster across a
+        // texel than anything the blur does and would stand in the border statistics.
+        opts.settings.transmittance.method = TransmittanceMethod::Off;
         let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
         r.render().unwrap();
         let (irradiance, _, blurred) = r.texture_space_maps(0).unwrap();

@@ -66,6 +66,9 @@ struct RegionsFile {
     /// A straight shadow edge to measure (the knife-edge scene).
     #[serde(default)]
     edge: Option<edge::EdgeSpec>,
+    /// Pixels to bin by the thickness the light crosses (backlit scenes).
+    #[serde(default)]
+    thickness: Option<thickness::ThicknessSpec>,
 }
 
 #[derive(Debug, Serialize)]
@@ -108,6 +111,9 @@ pub struct Report {
     /// The knife-edge measurement, when the regions file names an edge.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub edge: Option<edge::EdgeResult>,
+    /// Radiance against thickness, when the regions file asks for it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<thickness::ThicknessResult>,
     /// Largest difference (1/255 steps) between our CPU tone map and the GPU's frame: checks
     /// that FLIP sees what `subsurface render` writes.
     pub tonemap_check_max_diff: u8,
@@ -151,6 +157,7 @@ pub fn tone_map(linear: &[[f32; 3]], exposure_ev: f32, w: u32, h: u32) -> image:
 
 pub mod edge;
 pub mod flip;
+pub mod thickness;
 
 // ---------------------------------------------------------------- comparison
 
@@ -235,7 +242,17 @@ fn load_regions(args: &CompareArgs) -> Result<RegionsFile> {
         .iter()
         .enumerate()
         .map(|(i, r)| (format!("regions[{i}]"), r.rect));
-    for (name, [x0, y0, x1, y1]) in rects.chain(f.edge.iter().map(|e| ("edge".into(), e.rect))) {
+    if let Some(t) = &f.thickness {
+        anyhow::ensure!(
+            t.bin_mm > 0.0 && t.max_mm > t.bin_mm && t.max_mm / t.bin_mm <= 10_000.0,
+            "{}: thickness: bin_mm must be > 0 and max_mm above it (at most 10000 bins)",
+            path.display()
+        );
+    }
+    let rects = rects
+        .chain(f.edge.iter().map(|e| ("edge".into(), e.rect)))
+        .chain(f.thickness.iter().map(|t| ("thickness".into(), t.rect)));
+    for (name, [x0, y0, x1, y1]) in rects {
         anyhow::ensure!(
             [x0, y0, x1, y1].iter().all(|v| (0.0..=1.0).contains(v)) && x0 < x1 && y0 < y1,
             "{}: {name}.rect: must be [x0, y0, x1, y1] in 0..=1 with x0 < x1, y0 < y1",
@@ -258,6 +275,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     let RegionsFile {
         regions,
         edge: edge_spec,
+        thickness: thickness_spec,
     } = load_regions(args)?;
     let mut scene = load_scene(args.scene.as_ref(), None)?;
     args.settings.apply(&mut scene)?;
@@ -270,8 +288,8 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         opts.height()
     );
     anyhow::ensure!(
-        args.plot.is_none() || edge_spec.is_some(),
-        "--plot: the regions file names no edge to plot"
+        args.plot.is_none() || edge_spec.is_some() || thickness_spec.is_some(),
+        "--plot: the regions file names no edge or thickness curve to plot"
     );
     anyhow::ensure!(
         !(is_stdout(&args.out) && args.plot.as_deref().is_some_and(is_stdout)),
@@ -370,6 +388,21 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
 
     let edge = edge_spec
         .map(|spec| edge::measure(&ours, &reference, w, h, &spec, mm_per_pixel(&scene, h)));
+    let thickness = match thickness_spec {
+        Some(spec) => {
+            // The thickness each pixel's light crosses, from the same shadow maps: the
+            // thickness debug view writes it into the diffuse target (< 0: unknown).
+            let mut o = opts.clone();
+            o.view = subsurface_render::DebugView::Thickness;
+            renderer.update(&scene, &o)?;
+            renderer
+                .render()
+                .context("rendering the thickness view failed")?;
+            let s: Vec<f32> = renderer.read_diffuse()?.iter().map(|v| v[0]).collect();
+            Some(thickness::measure(&ours, &reference, &s, w, h, &spec))
+        }
+        None => None,
+    };
 
     // FLIP on the tone-mapped images.
     let ours_ldr = tone_map(&ours, opts.settings.exposure_ev, w, h);
@@ -393,7 +426,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         }
     }
     pending.write_png(&side)?;
-    if let (Some(file), Some(e)) = (plot_file, &edge) {
+    if let Some(file) = plot_file {
         let title = format!(
             "{}: {} + {}",
             args.scene
@@ -406,8 +439,12 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
                 .as_str()
                 .unwrap_or("?"),
         );
-        let img =
-            plot::draw_image((900, 560), |root| edge::draw(root, e, &title)).context("--plot")?;
+        let img = plot::draw_image((900, 560), |root| match (&edge, &thickness) {
+            (Some(e), _) => edge::draw(root, e, &title),
+            (None, Some(t)) => thickness::draw(root, t, &title),
+            (None, None) => Ok(()),
+        })
+        .context("--plot")?;
         file.write_png(&img).context("--plot")?;
     }
 
@@ -429,6 +466,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         flip_mean: flip_mean as f32,
         regions: region_results,
         edge,
+        thickness,
         tonemap_check_max_diff: check,
         out: args.out.display().to_string(),
     })
@@ -481,6 +519,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 f(e.edge_width_mm_reference)
             )
         });
+        let edge = edge
+            + &r.thickness.as_ref().map_or(String::new(), |t| {
+                let m = t.max_abs_rel_error;
+                format!(
+                    ", against thickness worst {:.0}/{:.0}/{:.0}% (R/G/B)",
+                    100.0 * m[0],
+                    100.0 * m[1],
+                    100.0 * m[2]
+                )
+            });
         format!(
             "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}{edge}; wrote {}",
             r.scene,

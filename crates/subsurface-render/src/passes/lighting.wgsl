@@ -211,7 +211,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             continue;
         }
         s.irradiance += radiance * shadow * max(dot(n, l), 0.0);
-        s.transmitted += radiance * transmittance(light, world, n_vertex, l);
+        s.transmitted += radiance * transmittance(light, world, n_vertex, l, shadow);
         s.specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
     }
     return s;

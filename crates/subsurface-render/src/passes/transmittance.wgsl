@@ -101,7 +101,8 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     return best;
 }
 
-fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+// `lit` is the light's shadow factor at p (1 = the light reaches p directly).
+fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, lit: f32) -> vec3<f32> {
     let method = lights.transmittance;
     // 4 (translucent shadow maps) has its own path, tsm_transmittance.
     if (method == 0u || method == 4u || method > 5u) {
@@ -127,7 +128,11 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>) 
             t = vec3<f32>(min(0.15 / pow(max(s_mm, 1e-3), 0.6), 1.0));
         }
         case 5u: {
-            t = diffusion_transmittance(s_mm);
+            // A point the light reaches directly is its own entry point: its light is the
+            // diffuse term's, and adding T(~0) E through the wrap below doubled it along
+            // every terminator (a front-lit sphere's shadow side read +23 % against the path
+            // tracer). As translucent shadow maps do, only the unlit part transmits.
+            t = diffusion_transmittance(s_mm) * (1.0 - lit);
         }
         default: {}
     }

@@ -12,7 +12,6 @@ pub enum TransmittanceMethod {
     Off,
     /// Jimenez et al. 2010: T(s) of the sum-of-Gaussians profile (colour turns from yellow to
     /// red with thickness).
-    #[default]
     Paper,
     /// Green 2004: Beer-Lambert exp(-sigma_t s) with the material's extinction.
     Beer,
@@ -26,7 +25,10 @@ pub enum TransmittanceMethod {
     /// the material's measured coefficients transmits (Donner and Jensen 2005's multipole),
     /// relative to what it reflects; it decays exponentially rather than like a Gaussian, so
     /// fingers and thick ears still glow red. The Gaussian skin preset uses skin1's
-    /// coefficients.
+    /// coefficients. The default: against the path tracer it is the closest on every backlit
+    /// canonical scene (docs/fidelity.md), where `Paper`'s Gaussian T(s) has all but vanished
+    /// at the thickness of a finger.
+    #[default]
     Diffusion,
 }
 
@@ -80,7 +82,7 @@ pub struct TransmittanceSettings {
 impl Default for TransmittanceSettings {
     fn default() -> Self {
         Self {
-            method: TransmittanceMethod::Paper,
+            method: TransmittanceMethod::default(),
             normal_shrink: 0.005,
             thickness_filter: 3,
         }
