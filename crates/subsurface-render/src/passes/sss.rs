@@ -2,7 +2,8 @@
 //!
 //! Methods: the six-Gaussian sum of Jimenez et al. 2009 / GPU Pro 2010 (each Gaussian from the
 //! previous one, accumulated by blending), Separable SSS (Jimenez et al. 2015: one horizontal
-//! and one vertical pass), and Hable et al. 2009's 13-tap 2-D kernel. Each pixel is blurred with
+//! and one vertical pass; with `jitter`, its few-sample mode of taps moved per pixel), and Hable
+//! et al. 2009's 13-tap 2-D kernel. Each pixel is blurred with
 //! the kernel of its own profile (a row of the profile table, as engines keep a diffusion
 //! profile per material), and every method reproduces `subsurface_profile::oracle::screen` on
 //! the same inputs.
