@@ -13,6 +13,9 @@ use subsurface_render::{
 };
 
 use crate::output::{PendingFile, print_summary};
+use memory::{Traffic, flip_means, traffic_of, traffic_table};
+
+mod memory;
 use crate::plot;
 use crate::settings_args::{load_scene, replicate};
 
@@ -61,6 +64,18 @@ pub struct BenchArgs {
     /// Separable kernel taps.
     #[arg(long, default_value_t = 17, value_name = "N")]
     pub samples: u32,
+    /// Separable: jitter the taps per pixel (the few-sample mode, e.g. --samples 7 --jitter).
+    #[arg(long)]
+    pub jitter: bool,
+    /// Separable runs: also render the frame with N fixed taps and report the FLIP mean (LDR)
+    /// of the measured settings against it, over the whole frame and over the skin pixels, e.g.
+    /// --samples 7 --jitter --flip-vs 33 for the quality the few-sample mode gives up.
+    #[arg(long, value_name = "N")]
+    pub flip_vs: Option<u32>,
+    /// Memory bandwidth of the adapter in GB/s (10^9 bytes/s): prints each modelled pass's
+    /// time against the time its compulsory bytes take at that rate (1 = at the memory limit).
+    #[arg(long, value_name = "GBPS")]
+    pub bandwidth: Option<f64>,
     /// Frames rendered and thrown away before timing (shader compilation, caches).
     #[arg(long, default_value_t = 5)]
     pub warmup: u32,
@@ -104,6 +119,17 @@ struct Run {
     copy_ms: f64,
     /// GPU time of the subsurface-scattering passes divided by the copy's.
     sss_over_copy: Option<f64>,
+    /// Separable taps and whether they were jittered.
+    samples: u32,
+    jitter: bool,
+    /// FLIP mean of the frame against the `--flip-vs` fixed-tap frame (separable runs): over
+    /// the whole frame, and over the skin pixels only (where SSS changes anything).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flip_vs_fixed: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flip_vs_fixed_skin: Option<f64>,
+    /// Bytes the modelled passes must move (passes::traffic), with the measured time.
+    traffic: Vec<Traffic>,
 }
 
 #[derive(Serialize)]
@@ -111,6 +137,12 @@ struct Report {
     adapter: String,
     warmup: u32,
     frames: u32,
+    /// `--bandwidth`, GB/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bandwidth_gbps: Option<f64>,
+    /// `--flip-vs`: the fixed-tap count the FLIP figures compare with.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flip_vs: Option<u32>,
     runs: Vec<Run>,
 }
 
@@ -177,6 +209,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         "--frames: must be at least 1 (got {})",
         args.frames
     );
+    if let Some(b) = args.bandwidth {
+        anyhow::ensure!(
+            b.is_finite() && b > 0.0,
+            "--bandwidth: must be finite and > 0 (got {b})"
+        );
+    }
+    if let Some(n) = args.flip_vs {
+        let fixed = subsurface_render::SssSettings {
+            samples: n,
+            ..Default::default()
+        };
+        if let Err(e) = fixed.validate() {
+            anyhow::bail!("--flip-vs: {}", e.message);
+        }
+    }
     for &c in &args.characters {
         anyhow::ensure!(
             (1..=256).contains(&c),
@@ -236,10 +283,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     (s.width, s.height) = (w, h);
                     s.sss.method = method;
                     s.sss.samples = args.samples;
+                    s.sss.jitter = args.jitter;
                     s.transmittance.method = tm;
                     opts.baseline_copy = true;
-                    let mut renderer =
-                        Renderer::new(&ctx, &scene, opts).context("creating the renderer")?;
+                    let sss_settings = opts.settings.sss.clone();
+                    let mut renderer = Renderer::new(&ctx, &scene, opts.clone())
+                        .context("creating the renderer")?;
                     let mut samples: Vec<Vec<PassTiming>> = Vec::new();
                     for i in 0..args.warmup + args.frames {
                         let t = renderer.render_timed()?;
@@ -250,6 +299,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     }
                     let mut run = summarise(samples, n, w, h, method, tm);
                     run.profiles = renderer.profile_table().kernels.len() as u32;
+                    (run.samples, run.jitter) = (args.samples, args.jitter);
+                    run.traffic = traffic_of(&run, &sss_settings, args.bandwidth);
+                    if let (Some(fixed), SssMethod::Separable) = (args.flip_vs, method) {
+                        let ours = renderer.render()?.image;
+                        let skin: Vec<bool> =
+                            renderer.read_sss()?.iter().map(|m| m[0] > 0.0).collect();
+                        let mut o = opts.clone();
+                        (o.settings.sss.samples, o.settings.sss.jitter) = (fixed, false);
+                        let reference = Renderer::new(&ctx, &scene, o)
+                            .context("--flip-vs")?
+                            .render()?
+                            .image;
+                        let (all, on_skin) = flip_means(&reference, &ours, &skin);
+                        (run.flip_vs_fixed, run.flip_vs_fixed_skin) = (Some(all), on_skin);
+                    }
                     runs.push(run);
                 }
             }
@@ -260,6 +324,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         adapter: ctx.adapter_name(),
         warmup: args.warmup,
         frames: args.frames,
+        bandwidth_gbps: args.bandwidth,
+        flip_vs: args.flip_vs,
         runs,
     };
     // With the plot on stdout (`--plot -`), the table goes to stderr.
@@ -327,6 +393,11 @@ fn summarise(
         passes,
         copy_ms,
         sss_over_copy: (sss_ms > 0.0 && copy_ms > 0.0).then(|| sss_ms / copy_ms),
+        samples: 0,
+        jitter: false,
+        flip_vs_fixed: None,
+        flip_vs_fixed_skin: None,
+        traffic: Vec::new(),
     }
 }
 
@@ -365,7 +436,21 @@ fn table(report: &Report) -> String {
             r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
         );
     }
-    out
+    if let Some(n) = report.flip_vs {
+        out += &format!("\nFLIP mean of the frame against {n} fixed taps (separable runs)\n");
+        for r in report.runs.iter().filter(|r| r.flip_vs_fixed.is_some()) {
+            out += &format!(
+                "{:>10} {} taps{}: {:.4} (skin pixels: {})\n",
+                format!("{}x{}", r.width, r.height),
+                r.samples,
+                if r.jitter { " jittered" } else { "" },
+                r.flip_vs_fixed.unwrap_or(0.0),
+                r.flip_vs_fixed_skin
+                    .map_or("-".into(), |f| format!("{f:.4}"))
+            );
+        }
+    }
+    out + &traffic_table(report)
 }
 
 const PLOT_SIZE: (u32, u32) = (900, 560);

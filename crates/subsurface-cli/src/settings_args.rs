@@ -32,6 +32,11 @@ pub struct SettingsArgs {
     /// Separable: number of kernel taps, odd, 3..=63 [default: render.sss.samples, 17].
     #[arg(long, value_name = "N")]
     pub samples: Option<u32>,
+    /// Separable: jitter the taps per pixel, Jimenez et al. 2015's few-sample mode (e.g.
+    /// --samples 7 --jitter): fixed taps' banding becomes fine noise (render.sss.jitter = true)
+    /// [default: render.sss.jitter, false].
+    #[arg(long)]
+    pub jitter: bool,
     /// Let the blur cross depth edges (render.sss.follow_surface = false).
     #[arg(long)]
     pub no_follow_surface: bool,
@@ -106,6 +111,9 @@ impl SettingsArgs {
         set!(self.transmittance, r.transmittance.method);
         set!(self.thickness_filter, r.transmittance.thickness_filter);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
+        if self.jitter {
+            r.sss.jitter = true;
+        }
         if self.no_follow_surface {
             r.sss.follow_surface = false;
         }
@@ -253,6 +261,7 @@ mod tests {
         let mut scene = Scene::default_scene();
         let args = SettingsArgs {
             samples: Some(9),
+            jitter: true,
             sss: Some(SssMethod::Hable13),
             sss_width: Some(2.0),
             kernel_strength: Some([1.0, 0.5, 0.25]),
@@ -260,6 +269,7 @@ mod tests {
         };
         args.apply(&mut scene).unwrap();
         assert_eq!(scene.desc.render.sss.samples, 9);
+        assert!(scene.desc.render.sss.jitter);
         assert_eq!(scene.desc.render.sss.method, SssMethod::Hable13);
         for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {
             assert_eq!(o.material.sss_width, 2.0);

@@ -67,6 +67,8 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         ),
         (&["render", "--out", "no/such/dir/o.png"], "o.png"),
         (&["kernel", "--samples", "64", "--json"], "samples"),
+        (&["bench", "--bandwidth", "0"], "--bandwidth"),
+        (&["bench", "--flip-vs", "8"], "--flip-vs"),
     ];
     for (args, needle) in cases {
         let out = subsurface(args, &dir);
@@ -95,24 +97,18 @@ fn kernel_json_has_n_taps_centre_first() {
     assert_eq!(taps[0][3], 0.0, "centre tap first");
 }
 
+/// `bench` at 64x48, one warm-up and two timed frames, JSON, with `extra` flags.
+fn small_bench<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "bench", "--width", "64", "--height", "48", "--warmup", "1", "--frames", "2", "--json",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn bench_json_has_runs_with_positive_times() {
-    let args = [
-        "bench",
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "--characters",
-        "1,2",
-        "--sss",
-        "none,separable",
-        "--warmup",
-        "1",
-        "--frames",
-        "2",
-        "--json",
-    ];
+    let args = small_bench(&["--characters", "1,2", "--sss", "none,separable"]);
     let Some((_, out)) = run_with_gpu("bench", &args) else {
         return;
     };
@@ -139,4 +135,50 @@ fn bench_json_has_runs_with_positive_times() {
             .iter()
             .any(|p| p["name"] == "sss")
     );
+}
+
+/// The few-sample mode's quality against more fixed taps, and the byte model beside the
+/// measured time with the ratio to the bandwidth bound.
+#[test]
+fn bench_reports_flip_and_memory_bound() {
+    let args = small_bench(&[
+        "--sss",
+        "separable",
+        "--samples",
+        "7",
+        "--jitter",
+        "--flip-vs",
+        "33",
+        "--bandwidth",
+        "10",
+    ]);
+    let Some((_, out)) = run_with_gpu("bench-bound", &args) else {
+        return;
+    };
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["bandwidth_gbps"], 10.0);
+    assert_eq!(v["flip_vs"], 33);
+    let r = &v["runs"][0];
+    assert_eq!(
+        (r["samples"].as_u64(), r["jitter"].as_bool()),
+        (Some(7), Some(true))
+    );
+    let flip = r["flip_vs_fixed"].as_f64().unwrap();
+    assert!((0.0..0.1).contains(&flip), "{r}");
+    let traffic = r["traffic"].as_array().unwrap();
+    let sss = traffic.iter().find(|t| t["name"] == "sss").unwrap();
+    // Two passes, each reading colour, depth and SSS data (20 B) and writing colour (8 B).
+    assert_eq!(sss["read_bytes"], 2 * 64 * 48 * 20);
+    assert_eq!(sss["write_bytes"], 2 * 64 * 48 * 8);
+    let bound = sss["bound_ms"].as_f64().unwrap();
+    assert!(
+        (bound - 2.0 * 64.0 * 48.0 * 28.0 / 1e7).abs() < 1e-9,
+        "{sss}"
+    );
+    let ratio = sss["over_bound"].as_f64().unwrap();
+    assert!(
+        (ratio - sss["ms"].as_f64().unwrap() / bound).abs() < 1e-9,
+        "{sss}"
+    );
+    assert!(traffic.iter().any(|t| t["name"] == "copy"));
 }

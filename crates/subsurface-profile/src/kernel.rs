@@ -261,6 +261,29 @@ fn separable_kernel_shaped(
         .collect())
 }
 
+/// Half-width (mm) over which the jittered few-sample mode moves each separable tap: a quarter
+/// of the tap's footprint (the distance to its neighbours in offset order, as
+/// [`separable_kernel_for`] measures it for the weights), so a tap wanders over the interval
+/// whose profile its weight stands for and the mean position stays at the tap. In kernel order
+/// (centre first); the centre tap, whose weight multiplies the pixel itself, is not moved (0).
+pub fn separable_jitter_widths(kernel: &[[f32; 4]]) -> Vec<f32> {
+    let mut sorted: Vec<f32> = kernel.iter().map(|t| t[3]).collect();
+    sorted.sort_by(f32::total_cmp);
+    kernel
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            if i == 0 {
+                return 0.0;
+            }
+            let o = t[3];
+            let left = sorted.iter().rev().find(|&&s| s < o).map_or(0.0, |s| o - s);
+            let right = sorted.iter().find(|&&s| s > o).map_or(0.0, |s| s - o);
+            0.25 * (left + right)
+        })
+        .collect()
+}
+
 /// Number of Gaussians the six-Gaussian screen-space method chains (d'Eon's skin has six).
 pub const SCREEN_GAUSSIANS: usize = 6;
 

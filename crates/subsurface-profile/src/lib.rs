@@ -34,8 +34,8 @@ pub use gaussian::{GaussianTerm, SKIN_VARIANCES_MM2, SKIN_WEIGHTS, SumOfGaussian
 pub use kernel::{
     DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS,
     HABLE13_TAPS, KernelParams, SCREEN_GAUSSIANS, ScreenKernels, gaussian_table, hable13_for,
-    hable13_kernel, separable_kernel, separable_kernel_for, separable_kernel_projected,
-    separable_range_for, separable_range_mm, separable_range_projected,
+    hable13_kernel, separable_jitter_widths, separable_kernel, separable_kernel_for,
+    separable_kernel_projected, separable_range_for, separable_range_mm, separable_range_projected,
 };
 pub use lut::TransmittanceLut;
 pub use materials::{

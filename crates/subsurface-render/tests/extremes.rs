@@ -121,26 +121,33 @@ fn all_finite(r: &Renderer) -> Result<(), String> {
 fn hdr_targets_stay_finite_at_every_extreme() {
     let Some(ctx) = context() else { return };
     let mut failures = Vec::new();
-    let mut cases: Vec<(String, Scene, SssMethod, TransmittanceMethod)> = Vec::new();
+    // (what, scene, SSS method, transmittance, separable's few-sample jitter)
+    let mut cases: Vec<(String, Scene, SssMethod, TransmittanceMethod, bool)> = Vec::new();
     for &(anchor, edits) in EDITS {
         for &(line, what) in edits {
-            cases.push((
-                what.into(),
-                edited(anchor, line),
-                SssMethod::Separable,
-                TransmittanceMethod::Paper,
-            ));
+            for jitter in [false, true] {
+                cases.push((
+                    format!("{what}, jitter {jitter}"),
+                    edited(anchor, line),
+                    SssMethod::Separable,
+                    TransmittanceMethod::Paper,
+                    jitter,
+                ));
+            }
         }
     }
     let base = scene(BASE);
     for sss in SssMethod::ALL {
         for t in TransmittanceMethod::ALL {
-            cases.push((format!("{sss}+{t}"), base.clone(), sss, t));
+            cases.push((format!("{sss}+{t}"), base.clone(), sss, t, false));
         }
     }
-    for (what, s, sss, t) in cases {
+    for (what, s, sss, t, jitter) in cases {
         let mut o = RenderOptions::from_scene(&s);
         o.settings.sss.method = sss;
+        if jitter {
+            (o.settings.sss.samples, o.settings.sss.jitter) = (7, true);
+        }
         o.settings.sss.texture_size = 64;
         o.settings.transmittance.method = t;
         let mut r = match Renderer::new(&ctx, &s, o) {

@@ -8,6 +8,7 @@ pub mod shadow;
 pub mod sss;
 pub mod texture_space;
 pub mod tonemap;
+pub mod traffic;
 pub mod transmittance;
 pub mod tsm;
 pub mod util;

@@ -2,7 +2,8 @@
 //!
 //! Methods: the six-Gaussian sum of Jimenez et al. 2009 / GPU Pro 2010 (each Gaussian from the
 //! previous one, accumulated by blending), Separable SSS (Jimenez et al. 2015: one horizontal
-//! and one vertical pass), and Hable et al. 2009's 13-tap 2-D kernel. Each pixel is blurred with
+//! and one vertical pass; with `jitter`, its few-sample mode of taps moved per pixel), and Hable
+//! et al. 2009's 13-tap 2-D kernel. Each pixel is blurred with
 //! the kernel of its own profile (a row of the profile table, as engines keep a diffusion
 //! profile per material), and every method reproduces `subsurface_profile::oracle::screen` on
 //! the same inputs.
@@ -54,7 +55,11 @@ struct SssUniform {
     gaussian: u32,
     previous: u32,
     profiles: u32,
-    _pad: [u32; 3],
+    /// Jittered separable: 0 for the horizontal pass, 1 for the vertical (seeds the hash).
+    seed: u32,
+    /// Jittered separable: first table row of the taps' jitter half-widths.
+    widths: u32,
+    _pad: u32,
 }
 
 /// The textures the pass works on. `diffuse` is read and overwritten (usage
@@ -72,6 +77,7 @@ pub struct SssInputs<'a> {
 #[derive(Clone, Copy)]
 enum Stage {
     Separable,
+    SeparableJitter,
     Gaussian,
     Hable13,
     Accumulate,
@@ -95,6 +101,9 @@ struct Bound {
 
 struct Pipelines {
     separable: wgpu::RenderPipeline,
+    /// The few-sample mode: the separable taps moved per pixel (its own entry point, so the
+    /// plain pass stays exactly as it was).
+    separable_jitter: wgpu::RenderPipeline,
     gaussian: wgpu::RenderPipeline,
     hable13: wgpu::RenderPipeline,
     /// Writes a blurred Gaussian and adds it, weighted, to the accumulation target.
@@ -109,6 +118,7 @@ impl Pipelines {
     fn get(&self, stage: Stage) -> &wgpu::RenderPipeline {
         match stage {
             Stage::Separable => &self.separable,
+            Stage::SeparableJitter => &self.separable_jitter,
             Stage::Gaussian => &self.gaussian,
             Stage::Hable13 => &self.hable13,
             Stage::Accumulate => &self.accumulate,
@@ -119,7 +129,7 @@ impl Pipelines {
 }
 
 /// The profile table as the shader reads it: per profile, the separable taps, Hable's 13 taps
-/// (two rows each) and the six Gaussians.
+/// (two rows each), the six Gaussians and the separable taps' jitter half-widths (mm, in x).
 fn table_rows(profiles: &[ScreenKernels]) -> Vec<[f32; 4]> {
     let mut rows = Vec::new();
     for p in profiles {
@@ -129,6 +139,8 @@ fn table_rows(profiles: &[ScreenKernels]) -> Vec<[f32; 4]> {
             rows.push([t[0], t[1], 0.0, 0.0]);
         }
         rows.extend_from_slice(&p.gaussians);
+        let widths = subsurface_profile::separable_jitter_widths(&p.separable);
+        rows.extend(widths.into_iter().map(|w| [w, 0.0, 0.0, 0.0]));
     }
     rows
 }
@@ -181,6 +193,7 @@ impl SssPass {
         let one = std::slice::from_ref(&replace);
         let pipelines = Pipelines {
             separable: make("fs_separable", one),
+            separable_jitter: make("fs_separable_jitter", one),
             gaussian: make("fs_gaussian", one),
             hable13: make("fs_hable13", one),
             accumulate: make("fs_gaussian_accumulate", &[replace.clone(), additive]),
@@ -317,9 +330,10 @@ impl SssPass {
             follow_surface: self.settings.follow_surface as u32,
             min_sigma_px: self.settings.min_sigma_px,
             taps,
-            stride: taps + (HABLE_ROWS + subsurface_profile::SCREEN_GAUSSIANS) as u32,
+            stride: 2 * taps + (HABLE_ROWS + subsurface_profile::SCREEN_GAUSSIANS) as u32,
             hable: taps,
             gaussians: taps + HABLE_ROWS as u32,
+            widths: taps + (HABLE_ROWS + subsurface_profile::SCREEN_GAUSSIANS) as u32,
             profiles: self.profiles as u32,
             ..Default::default()
         };
@@ -328,6 +342,7 @@ impl SssPass {
         match self.settings.method {
             SssMethod::Separable => {
                 u.direction = if i == 0 { horizontal } else { vertical };
+                u.seed = i as u32;
             }
             SssMethod::Gaussian6 if i > 0 => {
                 let (k, previous) = self.gaussian_steps()[(i - 1) / 2];
@@ -394,18 +409,13 @@ impl SssPass {
             SssMethod::Separable => {
                 let tmp = make_target("sss tmp");
                 let tmp_view = view(&tmp);
-                steps.push(step(
-                    Stage::Separable,
-                    bg(0, &diffuse_view, &self.dummy),
-                    1,
-                    false,
-                ));
-                steps.push(step(
-                    Stage::Separable,
-                    bg(1, &tmp_view, &self.dummy),
-                    0,
-                    false,
-                ));
+                let stage = if self.settings.jitter {
+                    Stage::SeparableJitter
+                } else {
+                    Stage::Separable
+                };
+                steps.push(step(stage, bg(0, &diffuse_view, &self.dummy), 1, false));
+                steps.push(step(stage, bg(1, &tmp_view, &self.dummy), 0, false));
                 targets.push(tmp_view);
                 textures.push(tmp);
             }

@@ -18,9 +18,9 @@ struct SssUniform {
     gaussian: u32,        // six Gaussians: the Gaussian this pass blurs up to
     previous: u32,        // and the one it starts from
     profiles: u32,        // rows of the table
+    seed: u32,            // jittered separable: 0 = horizontal pass, 1 = vertical
+    widths: u32,          // first row of the separable taps' jitter half-widths (mm, in x)
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 };
 
 @group(0) @binding(0) var<uniform> u: SssUniform;
@@ -115,6 +115,49 @@ fn fs_separable(in: FullscreenOut) -> @location(0) vec4<f32> {
     for (var i = 1u; i < u.taps; i++) {
         let k = table[c.base + i];
         sum += k.rgb * tap(in.clip.xy + u.direction * (k.w * c.px_per_mm), c);
+    }
+    return vec4<f32>(sum, 1.0);
+}
+
+// PCG's output hash (Jarzynski and Olano 2020): integers only, so the CPU oracle
+// (oracle::screen::jitter_value) draws exactly these numbers.
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The pixel's hash in this pass, drawn once (oracle::screen::jitter_seed).
+fn jitter_seed(texel: vec2<u32>) -> u32 {
+    return pcg(texel.x + pcg(texel.y + pcg(u.seed)));
+}
+
+// In [0, 1): the top 24 bits, exact in f32. Every pixel, pass and tap draws its own number.
+fn jitter_value(seed: u32, tap: u32) -> f32 {
+    return f32(pcg(seed + tap) >> 8u) * (1.0 / 16777216.0);
+}
+
+// Separable SSS's few-sample mode (2015: seven samples with jittering): each tap moves, per
+// pixel and pass, within the interval its weight stands for, so the few taps' ghost copies of
+// features turn into fine noise (oracle::screen::separable_jittered). The weights are
+// untouched: a flat surface keeps its energy.
+@fragment
+fn fs_separable_jitter(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = centre(in.clip.xy);
+    if (c.strength <= 0.0) {
+        return vec4<f32>(c.color, 1.0);
+    }
+    let seed = jitter_seed(vec2<u32>(in.clip.xy));
+    var sum = table[c.base].rgb * c.color;
+    for (var i = 1u; i < u.taps; i++) {
+        let k = table[c.base + i];
+        let width = table[c.base + u.widths + i].x;
+        // Rows i and taps - i are the taps at -o and +o: one number moves both outward or
+        // inward (a random scale of the pair), so their errors cancel on a linear gradient.
+        let xi = jitter_value(seed, min(i, u.taps - i));
+        let outward = select(-1.0, 1.0, k.w >= 0.0);
+        let o = k.w + outward * (2.0 * xi - 1.0) * width;
+        sum += k.rgb * tap(in.clip.xy + u.direction * (o * c.px_per_mm), c);
     }
     return vec4<f32>(sum, 1.0);
 }

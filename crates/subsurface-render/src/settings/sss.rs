@@ -63,6 +63,10 @@ pub struct SssSettings {
     pub method: SssMethod,
     /// Separable: number of kernel taps (odd, 3..=63).
     pub samples: u32,
+    /// Separable: move every tap, per pixel and pass, by a hashed amount within the interval
+    /// its weight stands for (Jimenez et al. 2015's jittering, which lets 7 taps stand in for
+    /// many): the banding of few taps becomes fine per-pixel noise.
+    pub jitter: bool,
     /// Screen space: weaken taps by their depth difference, so the blur follows the surface
     /// instead of crossing silhouettes and depth edges (Jimenez et al. 2009).
     pub follow_surface: bool,
@@ -87,6 +91,7 @@ impl Default for SssSettings {
         Self {
             method: SssMethod::Separable,
             samples: DEFAULT_SAMPLES,
+            jitter: false,
             follow_surface: true,
             edge_mm: 3.0,
             min_sigma_px: 0.25,

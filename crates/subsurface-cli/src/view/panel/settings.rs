@@ -23,6 +23,9 @@ fn side_settings(ui: &mut Ui, id: &str, s: &mut Side) -> bool {
     });
     if s.sss.method == SssMethod::Separable {
         changed |= odd_slider(ui, &mut s.sss.samples, 3, 63, "samples");
+        changed |= ui
+            .checkbox(&mut s.sss.jitter, "jitter (few-sample mode)")
+            .changed();
     }
     if s.sss.method == SssMethod::Gaussian6 {
         ui.horizontal(|ui| {

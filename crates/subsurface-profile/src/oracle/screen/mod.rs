@@ -149,6 +149,17 @@ fn check_table(input: &ScreenInput, kernels: &[ScreenKernels]) -> Result<()> {
     Ok(())
 }
 
+/// The checks every pass starts with: the input, the parameters and the profile table.
+fn check_inputs(
+    input: &ScreenInput,
+    kernels: &[ScreenKernels],
+    params: &ScreenParams,
+) -> Result<()> {
+    input.validate()?;
+    params.validate()?;
+    check_table(input, kernels)
+}
+
 impl ScreenParams {
     /// `focal_px` and `edge_mm` must be finite and > 0.
     pub fn validate(&self) -> Result<()> {
@@ -369,9 +380,7 @@ pub fn separable_pass(
     dir: [f32; 2],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
-    input.validate()?;
-    params.validate()?;
-    check_table(input, kernels)?;
+    check_inputs(input, kernels, params)?;
     finite("dir.x", dir[0] as f64)?;
     finite("dir.y", dir[1] as f64)?;
     Ok(separable_pass_on(input, &input.color, kernels, dir, params))
@@ -387,6 +396,83 @@ pub fn separable(
 ) -> Result<Vec<[f32; 3]>> {
     let h = separable_pass(input, kernels, [1.0, 0.0], params)?;
     Ok(separable_pass_on(input, &h, kernels, [0.0, 1.0], params))
+}
+
+/// PCG's output hash (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering"): integer
+/// arithmetic only, so the shader draws exactly the numbers the oracle draws.
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// The hash of pixel `(x, y)` in pass `pass` (0 = horizontal, 1 = vertical):
+/// `pcg(x + pcg(y + pcg(pass)))`, drawn once per pixel and pass.
+pub fn jitter_seed(x: u32, y: u32, pass: u32) -> u32 {
+    pcg_hash(x.wrapping_add(pcg_hash(y.wrapping_add(pcg_hash(pass)))))
+}
+
+/// The jitter of tap `tap` at a pixel of hash `seed` ([`jitter_seed`]), in [0, 1): the top
+/// 24 bits of `pcg(seed + tap)` (exact in f32). Every pixel, pass and tap draws its own
+/// number, so the error of few taps becomes per-pixel noise (high frequency, which a later
+/// temporal or spatial filter removes and the eye forgives) instead of the ghost copies of
+/// features that fixed tap positions leave.
+pub fn jitter_value(seed: u32, tap: u32) -> f32 {
+    (pcg_hash(seed.wrapping_add(tap)) >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// One jittered 1-D pass (`pass` 0 = horizontal, 1 = vertical) over `color`.
+fn separable_jittered_pass_on(
+    input: &ScreenInput,
+    color: &[[f32; 3]],
+    kernels: &[ScreenKernels],
+    pass: u32,
+    params: &ScreenParams,
+) -> Vec<[f32; 3]> {
+    let dir = if pass == 0 { [1.0, 0.0] } else { [0.0, 1.0] };
+    let widths: Vec<Vec<f32>> = kernels
+        .iter()
+        .map(|k| crate::kernel::separable_jitter_widths(&k.separable))
+        .collect();
+    each_skin_pixel(input, color, params, |c| {
+        let kernel = &kernels[c.profile as usize].separable;
+        let widths = &widths[c.profile as usize];
+        let seed = jitter_seed(c.p[0] as u32, c.p[1] as u32, pass);
+        let mut acc = [0.0; 3];
+        accumulate(
+            &mut acc,
+            [kernel[0][0], kernel[0][1], kernel[0][2]],
+            c.color,
+        );
+        let n = kernel.len();
+        for (i, t) in kernel.iter().enumerate().skip(1) {
+            let xi = jitter_value(seed, i.min(n - i) as u32);
+            let outward = if t[3] >= 0.0 { 1.0 } else { -1.0 };
+            let d = (t[3] + outward * (2.0 * xi - 1.0) * widths[i]) * c.px_per_mm;
+            let tap = c.tap(input, color, params, [dir[0] * d, dir[1] * d]);
+            accumulate(&mut acc, [t[0], t[1], t[2]], tap);
+        }
+        acc
+    })
+}
+
+/// Separable SSS's few-sample mode (Jimenez et al. 2015 reach seven samples by jittering):
+/// [`separable`] with each tap `i >= 1` moved, per pixel and pass, to
+/// `offset_i + sign(offset_i) (2 xi - 1) width_i` mm, `xi` = [`jitter_value`]`([`jitter_seed`]`(x, y, pass),
+/// min(i, N - i))` and `width_i` = [`crate::separable_jitter_widths`] of the pixel's profile.
+/// The two taps at `+o` and `-o` (kernel rows `i` and `N - i`) draw the same number and move
+/// outward or inward together, a random scale of that pair: on a linear gradient their errors
+/// cancel, so the noise is of the image's curvature only. The weights are unchanged, so every
+/// channel still sums to 1: a flat surface keeps its energy exactly, and over the jitter the
+/// expected kernel spreads each tap's weight over the interval it stands for.
+pub fn separable_jittered(
+    input: &ScreenInput,
+    kernels: &[ScreenKernels],
+    params: &ScreenParams,
+) -> Result<Vec<[f32; 3]>> {
+    check_inputs(input, kernels, params)?;
+    let h = separable_jittered_pass_on(input, &input.color, kernels, 0, params);
+    Ok(separable_jittered_pass_on(input, &h, kernels, 1, params))
 }
 
 /// One 7-tap Gaussian pass of standard deviation `sigma_mm` along `dir`.
@@ -436,9 +522,7 @@ pub fn gaussian6(
     params: &ScreenParams,
     min_sigma_px: f32,
 ) -> Result<Vec<[f32; 3]>> {
-    input.validate()?;
-    params.validate()?;
-    check_table(input, kernels)?;
+    check_inputs(input, kernels, params)?;
     finite("min_sigma_px", min_sigma_px as f64)?;
     let row = |i: usize, k: usize| kernels[input.profile[i] as usize].gaussians[k];
     let mut blurred = input.color.clone();
@@ -483,9 +567,7 @@ pub fn hable13(
     kernels: &[ScreenKernels],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
-    input.validate()?;
-    params.validate()?;
-    check_table(input, kernels)?;
+    check_inputs(input, kernels, params)?;
     Ok(blur_with_taps(
         input,
         &input.color,

@@ -351,3 +351,91 @@ fn profiles_do_not_mix_across_a_material_boundary() {
     assert_eq!(red(19), 0.0);
     assert!(red(43) > 1e-4, "{:?}", &out[row + 43..row + 47]);
 }
+
+fn jittered7() -> (Vec<ScreenKernels>, Method) {
+    let table = vec![
+        ScreenKernels::skin(&KernelParams {
+            samples: 7,
+            ..Default::default()
+        })
+        .unwrap(),
+    ];
+    (table, |i| {
+        let table = jittered7().0;
+        separable_jittered(i, &table, &PARAMS).unwrap()
+    })
+}
+
+#[test]
+fn jitter_widths_are_a_quarter_of_each_footprint() {
+    let kernel = &jittered7().0[0].separable;
+    // Offsets of 7 taps over 2 mm: 0, -2, -8/9, -2/9, 2/9, 8/9, 2.
+    let widths = crate::kernel::separable_jitter_widths(kernel);
+    let want = [0.0, 0.25 * 10.0 / 9.0, 0.25 * 16.0 / 9.0, 0.25 * 8.0 / 9.0];
+    for (i, w) in want.iter().enumerate() {
+        assert!((widths[i] - w).abs() < 1e-6, "tap {i}: {}", widths[i]);
+    }
+    assert_eq!(widths[1], widths[6]);
+    assert_eq!(widths[3], widths[4]);
+    // No jittered tap crosses the centre to the other side of the kernel.
+    for (t, w) in kernel.iter().zip(&widths).skip(1) {
+        assert!(t[3].abs() - w >= -1e-6, "{t:?} +- {w}");
+    }
+}
+
+#[test]
+fn jitter_values_are_uniform_and_differ_per_pass_and_tap() {
+    let mut hist = [0u32; 10];
+    for y in 0..100 {
+        for x in 0..100 {
+            let v = jitter_value(jitter_seed(x, y, 0), 1);
+            assert!((0.0..1.0).contains(&v));
+            hist[(v * 10.0) as usize] += 1;
+        }
+    }
+    // 1000 per bin expected; 4 standard deviations is about 120.
+    assert!(hist.iter().all(|&n| n.abs_diff(1000) < 130), "{hist:?}");
+    let v = |x, y, pass, tap| jitter_value(jitter_seed(x, y, pass), tap);
+    assert_ne!(v(3, 4, 0, 1), v(3, 4, 1, 1));
+    assert_ne!(v(3, 4, 0, 1), v(3, 4, 0, 2));
+    assert_ne!(v(3, 4, 0, 1), v(4, 3, 0, 1));
+}
+
+#[test]
+fn jittered_separable_keeps_flat_colour_and_background() {
+    let (_, run) = jittered7();
+    let color = [0.7, 0.4, 0.2];
+    let input = ScreenInput::uniform(24, 20, color, 1.5, 1.0, 2.0);
+    for p in run(&input) {
+        for k in 0..3 {
+            assert!((p[k] - color[k]).abs() < 1e-5, "{p:?}");
+        }
+    }
+    let input = split(1.0, 0.0);
+    let out = run(&input);
+    for (i, p) in out.iter().enumerate() {
+        if input.strength[i] == 0.0 {
+            assert_eq!(p.map(f32::to_bits), input.color[i].map(f32::to_bits));
+        }
+    }
+    assert!(worst_leak(&input, &out) < 0.02);
+}
+
+/// A gather with per-pixel positions is not a convolution, so an impulse's total is kept
+/// only on average: one impulse is off by up to ~8 % (the few pixels that gather from it each
+/// draw their own positions), 64 impulses 16 px apart (kernel +-4 px) by well under 2 %.
+#[test]
+fn jittered_impulse_energy_is_kept_on_average() {
+    let (_, run) = jittered7();
+    let mut input = ScreenInput::uniform(128, 128, [0.0; 3], 1.0, 1.0, 0.05);
+    for y in 0..8 {
+        for x in 0..8 {
+            input.color[(16 * y + 8) * 128 + 16 * x + 8] = [100.0; 3];
+        }
+    }
+    let out = run(&input);
+    for (k, s) in sum(&out).iter().enumerate() {
+        assert!((s / 6400.0 - 1.0).abs() < 0.02, "channel {k} sums to {s}");
+    }
+    assert!(out[8 * 128 + 8][0] < 99.0, "did not blur");
+}

@@ -1,0 +1,199 @@
+//! How many bytes an image pass must move at a given size: the memory bound that `bench`
+//! holds each measured time against (time / (bytes / bandwidth) says how far a pass is from
+//! the limit the memory sets).
+//!
+//! Two models, both from the textures' formats and the passes' taps:
+//! * **compulsory**: every texel a step reads is read once and every texel it writes is
+//!   written once; a perfect cache could not do with less, so it is the bound to compare with.
+//! * **per tap**: every texel every tap touches is read from memory (no cache at all): 1-D taps
+//!   bilinearly filter 2 texels, 2-D taps 4, each loading colour, depth and SSS data. The gap
+//!   between the two is what the texture cache has to save.
+//!
+//! Every pixel is counted as skin (the passes read only the centre of the others), and the
+//! six-Gaussian removal of sub-pixel Gaussians is ignored: the per-tap model is an upper
+//! bound, the compulsory one a lower bound.
+
+use crate::passes::{lighting, sss};
+use crate::settings::{SssMethod, SssSettings};
+
+/// Bytes per texel of `format` (the formats these passes use are all uncompressed).
+fn texel_bytes(format: wgpu::TextureFormat) -> u64 {
+    u64::from(format.block_copy_size(None).unwrap_or(0))
+}
+
+/// Bytes one step moves per pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct PerPixel {
+    read: u64,
+    write: u64,
+    /// Reads of the per-tap model.
+    read_taps: u64,
+}
+
+impl std::ops::Add for PerPixel {
+    type Output = PerPixel;
+    fn add(self, o: PerPixel) -> PerPixel {
+        PerPixel {
+            read: self.read + o.read,
+            write: self.write + o.write,
+            read_taps: self.read_taps + o.read_taps,
+        }
+    }
+}
+
+/// The bytes one pass (all its steps) moves at one size.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PassTraffic {
+    /// The pass's name in the timings (`sss`, `copy`).
+    pub name: &'static str,
+    /// Compulsory model: bytes read.
+    pub read_bytes: u64,
+    /// Compulsory model: bytes written.
+    pub write_bytes: u64,
+    /// Per-tap model: bytes read (writes as in the compulsory model).
+    pub read_bytes_per_tap: u64,
+}
+
+impl PassTraffic {
+    /// Compulsory bytes moved, read and write.
+    pub fn bytes(&self) -> u64 {
+        self.read_bytes + self.write_bytes
+    }
+
+    /// The time the compulsory bytes take at `gbps` (10^9 bytes per second), in ms.
+    pub fn bound_ms(&self, gbps: f64) -> f64 {
+        self.bytes() as f64 / (gbps * 1e6)
+    }
+
+    fn from(name: &'static str, p: PerPixel, pixels: u64) -> Self {
+        Self {
+            name,
+            read_bytes: p.read * pixels,
+            write_bytes: p.write * pixels,
+            read_bytes_per_tap: p.read_taps * pixels,
+        }
+    }
+}
+
+/// One blur step of `taps` taps besides the centre, each filtering `texels` texels: reads
+/// colour, depth and SSS data at the centre and at every texel of every tap, writes colour.
+fn blur_step(taps: u64, texels: u64) -> PerPixel {
+    let texel = texel_bytes(sss::FORMAT)
+        + texel_bytes(lighting::DEPTH_FORMAT)
+        + texel_bytes(lighting::SSS_FORMAT);
+    PerPixel {
+        read: texel,
+        write: texel_bytes(sss::FORMAT),
+        read_taps: texel * (1 + taps * texels),
+    }
+}
+
+/// A step that reads `read` bytes per pixel once and writes `write` (no taps).
+fn plain_step(read: u64, write: u64) -> PerPixel {
+    PerPixel {
+        read,
+        write,
+        read_taps: read,
+    }
+}
+
+/// The screen-space SSS passes with `settings` at `width` x `height` (the timed `sss`
+/// passes; the copy of the input that Hable's pass starts from is outside them), or None for
+/// methods that are not screen space.
+pub fn sss_traffic(settings: &SssSettings, width: u32, height: u32) -> Option<PassTraffic> {
+    let colour = texel_bytes(sss::FORMAT);
+    let mask = texel_bytes(lighting::SSS_FORMAT);
+    let per_pixel = match settings.method {
+        SssMethod::None | SssMethod::Texture => return None,
+        // One horizontal and one vertical pass of samples - 1 bilinear 1-D taps.
+        SssMethod::Separable => {
+            let step = blur_step(u64::from(settings.samples) - 1, 2);
+            step + step
+        }
+        // One 2-D pass of 12 bilinear 2-D taps.
+        SssMethod::Hable13 => blur_step(12, 4),
+        SssMethod::Gaussian6 => {
+            // The narrowest Gaussian starts the accumulation: colour and SSS data in, the
+            // weighted colour out.
+            let mut total = plain_step(colour + mask, colour);
+            for _ in settings.gaussians.iter().filter(|g| **g) {
+                // H: a 7-tap 1-D blur. V: the same, and its weighted result blended into the
+                // accumulation target (the blend reads and writes it).
+                let blur = blur_step(6, 2);
+                total = total + blur + blur + plain_step(colour, colour);
+            }
+            // The accumulation written back on skin pixels (SSS data and accumulation in).
+            total + plain_step(mask + colour, colour)
+        }
+    };
+    Some(PassTraffic::from(
+        "sss",
+        per_pixel,
+        u64::from(width) * u64::from(height),
+    ))
+}
+
+/// The baseline copy (`copy.wgsl`) of the diffuse radiance target: one texel in, one out per
+/// pixel.
+pub fn copy_traffic(width: u32, height: u32) -> PassTraffic {
+    let c = texel_bytes(lighting::RADIANCE_FORMAT);
+    PassTraffic::from(
+        "copy",
+        plain_step(c, c),
+        u64::from(width) * u64::from(height),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(method: SssMethod, samples: u32) -> SssSettings {
+        SssSettings {
+            method,
+            samples,
+            ..Default::default()
+        }
+    }
+
+    /// The models worked by hand: Rgba16Float colour (8 B), R32Float depth (4 B), Rgba16Float
+    /// SSS data (8 B), so a texel of a tap is 20 B and a written pixel 8 B.
+    #[test]
+    fn byte_model_by_hand() {
+        let px = 100 * 10;
+        let sep = sss_traffic(&settings(SssMethod::Separable, 17), 100, 10).unwrap();
+        assert_eq!(sep.read_bytes, 2 * px * 20);
+        assert_eq!(sep.write_bytes, 2 * px * 8);
+        // Per pass: the centre and 16 taps of 2 texels.
+        assert_eq!(sep.read_bytes_per_tap, 2 * px * 20 * 33);
+        // Jitter moves the taps, not their number.
+        let mut jittered = settings(SssMethod::Separable, 7);
+        jittered.jitter = true;
+        let j = sss_traffic(&jittered, 100, 10).unwrap();
+        assert_eq!(j.read_bytes_per_tap, 2 * px * 20 * 13);
+        assert_eq!(j.bytes(), sep.bytes());
+
+        let hable = sss_traffic(&settings(SssMethod::Hable13, 17), 100, 10).unwrap();
+        assert_eq!((hable.read_bytes, hable.write_bytes), (px * 20, px * 8));
+        assert_eq!(hable.read_bytes_per_tap, px * 20 * 49);
+
+        // Start (16 in, 8 out), five Gaussians of H (20, 8) and V (20 + 8 blend, 8 + 8),
+        // resolve (16, 8).
+        let g = sss_traffic(&settings(SssMethod::Gaussian6, 17), 100, 10).unwrap();
+        assert_eq!(g.read_bytes, px * (16 + 5 * 48 + 16));
+        assert_eq!(g.write_bytes, px * (8 + 5 * 24 + 8));
+        assert_eq!(g.read_bytes_per_tap, px * (16 + 5 * (2 * 20 * 13 + 8) + 16));
+        let mut three = settings(SssMethod::Gaussian6, 17);
+        three.gaussians = [true, false, true, false, true];
+        let g3 = sss_traffic(&three, 100, 10).unwrap();
+        assert_eq!(g3.read_bytes, px * (16 + 3 * 48 + 16));
+
+        for m in [SssMethod::None, SssMethod::Texture] {
+            assert_eq!(sss_traffic(&settings(m, 17), 100, 10), None);
+        }
+        let copy = copy_traffic(1280, 720);
+        assert_eq!(copy.bytes(), 1280 * 720 * 16);
+        // 14.7 MB at 10 GB/s: 1.47 ms.
+        assert!((copy.bound_ms(10.0) - 1.47456).abs() < 1e-9);
+    }
+}
