@@ -76,7 +76,9 @@ pub fn exported_medium(medium: &Medium) -> Result<(Dipole, bool)> {
 /// is `mm_per_unit / (s * sss_width)` "profile millimetres" (the inverse of the renderer's
 /// `world_per_mm`).
 pub fn medium_per_unit(m: &Dipole, object: &Object) -> ([f64; 3], [f64; 3]) {
-    let s = f64::from(object.transform.determinant().abs().cbrt());
+    // In f64: an f32 determinant of a 1e-30 or 1e30 scale underflows or overflows (NaN
+    // coefficients reached the XML).
+    let s = object.transform.as_dmat4().determinant().abs().cbrt();
     let mm_per_scene_unit =
         f64::from(object.mm_per_unit) / (s * f64::from(object.material.sss_width));
     let sigma_s = m.sigma_s_prime.map(|x| x * mm_per_scene_unit);
@@ -87,6 +89,19 @@ pub fn medium_per_unit(m: &Dipole, object: &Object) -> ([f64; 3], [f64; 3]) {
 fn v3(v: impl Into<Vec3>) -> String {
     let v = v.into();
     format!("{:.9}, {:.9}, {:.9}", v.x, v.y, v.z)
+}
+
+/// Mitsuba reads every number as a 32-bit float: a value past f32::MAX would be infinite
+/// there, so it is an error naming `field` before anything is written.
+fn fits(field: &str, what: &str, values: &[f64]) -> Result<()> {
+    let max = f64::from(f32::MAX);
+    match values.iter().find(|v| v.is_nan() || v.abs() > max) {
+        Some(v) => anyhow::bail!(
+            "{field}: {what} would be {v:e} in the Mitsuba scene, past the largest 32-bit float \
+             ({max:e}) Mitsuba reads"
+        ),
+        None => Ok(()),
+    }
 }
 
 fn rgb(c: [f64; 3]) -> String {
@@ -105,10 +120,19 @@ fn up_for(dir: Vec3, preferred: Vec3) -> Vec3 {
 }
 
 /// Binary little-endian PLY: float x y z nx ny nz, triangles as uchar count + uint indices.
-fn ply_bytes(object: &Object) -> Vec<u8> {
+/// `objects[i]` names the object in the error when a world-space vertex is not finite (scene
+/// loading rejects such transforms; this keeps the file from ever holding one).
+fn ply_bytes(object: &Object, i: usize) -> Result<Vec<u8>> {
     let mut mesh = object.mesh.clone();
     // Positions to world; normals by the inverse transpose (and re-normalised by Mitsuba).
     mesh.transform(object.transform);
+    if let Some(k) = mesh
+        .vertices
+        .iter()
+        .position(|v| !v.position.iter().chain(&v.normal).all(|x| x.is_finite()))
+    {
+        anyhow::bail!("objects[{i}]: world-space vertex {k} is not finite");
+    }
     let header = format!(
         "ply\nformat binary_little_endian 1.0\ncomment subsurface export-mitsuba: {}\n\
          element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
@@ -131,7 +155,7 @@ fn ply_bytes(object: &Object) -> Vec<u8> {
             b.extend_from_slice(&i.to_le_bytes());
         }
     }
-    b
+    Ok(b)
 }
 
 /// File names of the PLYs: index and a sanitised object name.
@@ -217,6 +241,11 @@ pub fn scene_xml(
     }
     for (i, l) in d.lights.iter().enumerate() {
         let power = l.color.map(|c| f64::from(c) * f64::from(l.intensity) * pi);
+        fits(
+            &format!("lights[{i}].intensity"),
+            "pi x color x intensity",
+            &power,
+        )?;
         let (p, t) = (Vec3::from(l.position), Vec3::from(l.target));
         if l.shadow_map_size == 0 {
             warnings.push(format!("lights[{i}]: shadow_map_size = 0 (unshadowed) cannot be expressed; Mitsuba shadows it"));
@@ -301,6 +330,21 @@ pub fn scene_xml(
             // Mitsuba treats an RGB sigma_t like a reflectance (values above 1 are not
             // representable): store sigma_t / max and the max as `scale`.
             let scale = st.iter().copied().fold(0.0, f64::max);
+            let field = format!("objects[{i}].scale");
+            fits(
+                &field,
+                "the medium's sigma per scene unit (sigma in 1/mm x mm_per_unit / (scale x \
+                 sss_width))",
+                &[sa, ss].concat(),
+            )?;
+            // Below the smallest f32 the medium would be empty (sigma_t = 0: no scattering).
+            anyhow::ensure!(
+                st.iter().all(|&v| v as f32 > 0.0),
+                "{field}: the medium's sigma_t would be {:e} per scene unit in the Mitsuba \
+                 scene, below the smallest 32-bit float (mm_per_unit / (scale x sss_width) is \
+                 too small)",
+                st.iter().copied().fold(f64::INFINITY, f64::min)
+            );
             writeln!(
                 x,
                 "    <!-- {}: sigma_a {:?}, sigma_s' {:?} /mm, eta {}; per scene unit: sigma_a [{}], sigma_s [{}] -->\n    \
@@ -336,9 +380,12 @@ pub fn scene_xml(
 }
 
 /// Writes `DIR/scene.xml` and `DIR/meshes/*.ply`. Everything is built in memory first and
-/// written through temporary files, so a failure leaves no half-written scene.
+/// written through temporary files, so a failure leaves no half-written scene; a value the
+/// export cannot write is an error that starts with `source` (the scene file) and creates
+/// nothing.
 pub fn export(
     scene: &Scene,
+    source: &str,
     out: &Path,
     width: u32,
     height: u32,
@@ -352,13 +399,15 @@ pub fn export(
     anyhow::ensure!(spp > 0, "--spp: must be at least 1");
     anyhow::ensure!(max_depth > 0, "--max-depth: must be at least 1");
     let mut warnings = Vec::new();
-    let xml = scene_xml(scene, width, height, spp, max_depth, &mut warnings)?;
+    let xml = scene_xml(scene, width, height, spp, max_depth, &mut warnings)
+        .with_context(|| source.to_string())?;
     let plys: Vec<(String, Vec<u8>)> = scene
         .objects
         .iter()
         .enumerate()
-        .map(|(i, o)| (ply_name(i, o), ply_bytes(o)))
-        .collect();
+        .map(|(i, o)| Ok((ply_name(i, o), ply_bytes(o, i)?)))
+        .collect::<Result<_>>()
+        .with_context(|| source.to_string())?;
     let meshes = out.join("meshes");
     std::fs::create_dir_all(&meshes)
         .with_context(|| format!("{}: cannot create", meshes.display()))?;
@@ -381,7 +430,19 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let scene = crate::settings_args::load_scene(args.scene.as_ref(), None)?;
     let width = args.width.unwrap_or(scene.desc.render.width);
     let height = args.height.unwrap_or(scene.desc.render.height);
-    let warnings = export(&scene, &args.out, width, height, args.spp, args.max_depth)?;
+    let source = args
+        .scene
+        .as_ref()
+        .map_or("<default scene>".into(), |p| p.display().to_string());
+    let warnings = export(
+        &scene,
+        &source,
+        &args.out,
+        width,
+        height,
+        args.spp,
+        args.max_depth,
+    )?;
     for w in &warnings {
         eprintln!("note: {w}");
     }

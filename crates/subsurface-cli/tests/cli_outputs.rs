@@ -12,23 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use common::{assert_success, assert_whole_png, bin, skip, subsurface, tempdir, text};
-
-/// The single line on stderr of a command that failed with exit status 1, which must start
-/// with `error: `.
-fn error_line(out: &Output) -> String {
-    let s = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(1), "{s}");
-    // lavapipe itself prints "error: XDG_RUNTIME_DIR is invalid" without a display; not ours.
-    let lines: Vec<&str> = s
-        .lines()
-        .filter(|l| !l.contains("XDG_RUNTIME_DIR"))
-        .collect();
-    assert_eq!(lines.len(), 1, "expected one line on stderr, got: {s}");
-    assert!(lines[0].starts_with("error: "), "{s}");
-    assert!(lines[0].len() > "error: ".len() + 5, "{s}");
-    lines[0].to_string()
-}
+use common::{assert_success, assert_whole_png, bin, error_line, skip, subsurface, tempdir, text};
 
 fn partial_files(dir: &Path) -> Vec<String> {
     let Ok(entries) = std::fs::read_dir(dir) else {

@@ -199,6 +199,7 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         check_options(ctx, &options)?;
         crate::budget::check(scene, &options.settings)?;
+        texture_space::check_uvs(scene, &texture_settings(&options))?;
         let device = &ctx.device;
         let object_layout = gpu_scene::object_layout(device);
         let profiles = profile_table(scene, &options)?;
@@ -288,6 +289,7 @@ impl Renderer {
     pub fn update(&mut self, scene: &Scene, options: &RenderOptions) -> Result<(), RenderError> {
         check_options(&self.ctx, options)?;
         crate::budget::check(scene, &options.settings)?;
+        texture_space::check_uvs(scene, &texture_settings(options))?;
         let device = self.ctx.device.clone();
         let queue = self.ctx.queue.clone();
         let names: Vec<String> = scene

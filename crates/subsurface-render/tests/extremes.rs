@@ -60,6 +60,10 @@ const EDITS: &[(&str, &[(&str, &str)])] = &[
             ),
         ],
     ),
+    (
+        "intensity = 0.05",
+        &[("position = [1e18, 1e18, 1e18]", "distant point light")],
+    ),
     ("segments = 24 }", &[("scale = 1e-30", "object scale")]),
     (
         "near = 0.05",
@@ -160,6 +164,61 @@ fn hdr_targets_stay_finite_at_every_extreme() {
         r.render().unwrap();
         if let Err(e) = all_finite(&r) {
             failures.push(format!("{what}: {e}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every radiance at its largest at once: ambient, and each light's colour and intensity at
+/// f32::MAX (their product is infinite in f32, and the shader multiplies it by fall-off and
+/// spot factors that can be 0: inf x 0 = NaN unless it saturates first). The HDR targets stay
+/// finite and the image is saturated white where the sphere is, not NaN-black, with every
+/// SSS method and every transmittance method. So no upper bound is needed on `intensity`,
+/// `color` or `render.ambient` for rendering (`export-mitsuba` has its own, Mitsuba's floats).
+#[test]
+fn every_radiance_at_f32_max_at_once_stays_finite() {
+    let Some(ctx) = context() else { return };
+    let max = "3.4e38";
+    let text = BASE
+        .replace(
+            "[render]",
+            &format!("[render]\nambient = [{max}, {max}, {max}]"),
+        )
+        .replace(
+            "intensity = 2.0",
+            &format!("intensity = {max}\ncolor = [{max}, {max}, {max}]"),
+        )
+        .replace(
+            "intensity = 0.05",
+            &format!("intensity = {max}\ncolor = [{max}, 0.0, {max}]"),
+        )
+        + &format!(
+            "[[lights]]\nkind = \"directional\"\nposition = [0.0, 1.0, 1.0]\nintensity = {max}\ncolor = [{max}, {max}, {max}]\nshadow_map_size = 64\n"
+        );
+    let s = scene(&text);
+    let mut failures = Vec::new();
+    let methods = SssMethod::ALL
+        .into_iter()
+        .map(|m| (m, TransmittanceMethod::Paper))
+        .chain(
+            TransmittanceMethod::ALL
+                .into_iter()
+                .map(|t| (SssMethod::Separable, t)),
+        );
+    for (sss, t) in methods {
+        let mut o = RenderOptions::from_scene(&s);
+        o.settings.sss.method = sss;
+        o.settings.sss.texture_size = 64;
+        o.settings.transmittance.method = t;
+        let mut r = Renderer::new(&ctx, &s, o).unwrap();
+        let frame = r.render().unwrap();
+        if let Err(e) = all_finite(&r) {
+            failures.push(format!("{sss}+{t}: {e}"));
+        }
+        // The sphere covers the centre of the frame.
+        let c = frame.image.get_pixel(32, 24).0;
+        if c[..3].iter().any(|&v| v < 250) {
+            failures.push(format!("{sss}+{t}: centre pixel {c:?}, not saturated"));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

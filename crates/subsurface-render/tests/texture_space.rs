@@ -429,3 +429,55 @@ fn irradiance_view_shows_the_uv_map() {
     assert!(lit > n / 8, "too little of the map is lit: {lit} of {n}");
     assert_eq!(agree, n, "image and map disagree on {} texels", n - agree);
 }
+
+/// A skin object without UVs (a glTF without TEXCOORD_0 has every uv at the origin) cannot be
+/// laid out in texture space: it rendered black with exit 0. Both texture-space methods are
+/// now an error naming the object, from `Renderer::new` and from `Renderer::update` (the
+/// viewer switching the method on), and the renderer keeps working after the refused update.
+#[test]
+fn texture_space_needs_uvs() {
+    let Some(ctx) = context() else { return };
+    let mut scene = small_sphere([0.0, 0.0, 1.0]);
+    for v in &mut scene.objects[0].mesh.vertices {
+        v.uv = [0.0, 0.0];
+    }
+    let base = options(&scene, 32, 32);
+    let with = |sss: SssMethod, t: TransmittanceMethod| {
+        let mut o = base.clone();
+        o.settings.sss.method = sss;
+        o.settings.sss.texture_size = 64;
+        o.settings.transmittance.method = t;
+        o
+    };
+    let expected = "objects[0].mesh: object0 has no texture coordinates";
+    for (sss, t) in [
+        (SssMethod::Texture, TransmittanceMethod::Paper),
+        (SssMethod::Separable, TransmittanceMethod::Tsm),
+    ] {
+        let e = Renderer::new(&ctx, &scene, with(sss, t))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.starts_with(expected), "{e}");
+    }
+    let screen = with(SssMethod::Separable, TransmittanceMethod::Paper);
+    let mut r = Renderer::new(&ctx, &scene, screen.clone()).unwrap();
+    let e = r
+        .update(
+            &scene,
+            &with(SssMethod::Texture, TransmittanceMethod::Paper),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with(expected), "{e}");
+    r.update(&scene, &screen).unwrap();
+    r.render().unwrap();
+    // Non-skin objects need no maps, so no UVs either.
+    scene.edit_materials(|m| m.sss_strength = 0.0);
+    Renderer::new(
+        &ctx,
+        &scene,
+        with(SssMethod::Texture, TransmittanceMethod::Tsm),
+    )
+    .unwrap();
+}

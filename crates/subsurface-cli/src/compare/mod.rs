@@ -77,13 +77,20 @@ pub struct RegionResult {
     pub pixels: usize,
     pub mean_realtime: [f32; 3],
     pub mean_reference: [f32; 3],
-    /// (Y_realtime - Y_reference) / Y_reference of the region means' luminance.
-    pub rel_error: f32,
+    /// (Y_realtime - Y_reference) / Y_reference of the region means' luminance; None (null)
+    /// where the reference is black, with the reason in `note`.
+    pub rel_error: Option<f32>,
     /// Standard error of `rel_error` from the reference's own noise (its `.stderr.exr`; the
     /// channels are taken as fully correlated, so this errs on the large side). None without
-    /// a standard-error image.
+    /// a standard-error image or a relative error.
     pub rel_stderr: Option<f32>,
+    /// Why `rel_error` is missing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
+
+/// Why a relative error is None: dividing by a black reference gave NaN% (0/0) or inf%.
+const BLACK_REFERENCE: &str = "the reference is black here (mean 0): no relative error";
 
 #[derive(Debug, Serialize)]
 pub struct Report {
@@ -95,8 +102,8 @@ pub struct Report {
     pub height: u32,
     /// Linear radiance, all pixels and channels.
     pub rmse: f32,
-    /// `rmse` / mean reference radiance.
-    pub rel_rmse: f32,
+    /// `rmse` / mean reference radiance; None (null) for a black reference.
+    pub rel_rmse: Option<f32>,
     /// RMS of the reference's per-pixel standard error: the part of `rmse` that is the path
     /// tracer's noise. None without a standard-error image.
     pub noise_rms: Option<f32>,
@@ -178,11 +185,15 @@ pub fn read_reference(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
         .to_rgb32f();
     let (w, h) = img.dimensions();
     let px: Vec<[f32; 3]> = img.pixels().map(|p| p.0).collect();
-    anyhow::ensure!(
-        px.iter().flatten().all(|v| v.is_finite()),
-        "{}: the reference has non-finite pixels",
-        path.display()
-    );
+    if let Some(i) = px.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        anyhow::bail!(
+            "{}: pixel ({}, {}) is {:?}: the reference must be finite",
+            path.display(),
+            i % w as usize,
+            i / w as usize,
+            px[i]
+        );
+    }
     Ok((w, h, px))
 }
 
@@ -332,6 +343,8 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .map(|v| f64::from(*v))
         .sum::<f64>()
         / (3 * n) as f64;
+    // Relative to the reference's mean, which must be positive to divide by.
+    let relative = |v: f64| (ref_mean > 0.0).then(|| (v / ref_mean) as f32);
 
     // Region means, always starting with all skin pixels.
     let is_skin = |i: usize| mask[i][0] > 0.0;
@@ -366,19 +379,18 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             let k = 1.0 / count.max(1) as f64;
             let (ma, mb) = (a.map(|v| (v * k) as f32), b.map(|v| (v * k) as f32));
             let (ya, yb) = (luminance(ma), luminance(mb));
+            let defined = yb > 0.0;
             RegionResult {
                 name: r.name,
                 pixels: count,
                 mean_realtime: ma,
                 mean_reference: mb,
-                rel_error: if count == 0 || yb <= 0.0 {
-                    f32::NAN
-                } else {
-                    (ya - yb) / yb
-                },
+                rel_error: defined.then(|| (ya - yb) / yb),
                 rel_stderr: stderr
                     .as_ref()
-                    .map(|_| (var_y.sqrt() * k / f64::from(yb.max(1e-12))) as f32),
+                    .filter(|_| defined)
+                    .map(|_| (var_y.sqrt() * k / f64::from(yb)) as f32),
+                note: (!defined).then(|| BLACK_REFERENCE.to_string()),
             }
         })
         .collect();
@@ -459,10 +471,10 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         width: w,
         height: h,
         rmse: rmse as f32,
-        rel_rmse: (rmse / ref_mean.max(1e-12)) as f32,
+        rel_rmse: relative(rmse),
         noise_rms: noise_ms.map(|v| v.sqrt() as f32),
         rmse_debiased: rmse_debiased.map(|v| v as f32),
-        rel_rmse_debiased: rmse_debiased.map(|v| (v / ref_mean.max(1e-12)) as f32),
+        rel_rmse_debiased: rmse_debiased.and_then(relative),
         flip_mean: flip_mean as f32,
         regions: region_results,
         edge,
@@ -487,6 +499,16 @@ fn mm_per_pixel(scene: &subsurface_render::Scene, h: u32) -> f32 {
     world / per_mm
 }
 
+/// `x` with `digits` decimals, or "n/a" where a black reference left it undefined (the edge
+/// widths come out NaN without light on either side).
+fn n_a(x: f32, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.digits$}")
+    } else {
+        "n/a".into()
+    }
+}
+
 pub fn run(args: &CompareArgs) -> Result<()> {
     let r = compare(args)?;
     let text = if args.json {
@@ -495,14 +517,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let regions: Vec<String> = r
             .regions
             .iter()
-            .map(|g| match g.rel_stderr {
-                Some(se) => format!(
-                    "{} {:+.1}% (±{:.1}%)",
-                    g.name,
-                    100.0 * g.rel_error,
-                    100.0 * se
-                ),
-                None => format!("{} {:+.1}%", g.name, 100.0 * g.rel_error),
+            .map(|g| match (g.rel_error, g.rel_stderr) {
+                (Some(e), Some(se)) => {
+                    format!("{} {:+.1}% (±{:.1}%)", g.name, 100.0 * e, 100.0 * se)
+                }
+                (Some(e), None) => format!("{} {:+.1}%", g.name, 100.0 * e),
+                (None, _) => format!("{} n/a (black reference)", g.name),
             })
             .collect();
         let noise = match (r.rmse_debiased, r.noise_rms) {
@@ -512,7 +532,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             _ => String::new(),
         };
         let edge = r.edge.as_ref().map_or(String::new(), |e| {
-            let f = |v: [f32; 3]| format!("{:.2}/{:.2}/{:.2}", v[0], v[1], v[2]);
+            let f = |v: [f32; 3]| v.map(|x| n_a(x, 2)).join("/");
             format!(
                 ", edge width (10-90 %, R/G/B mm) {} vs reference {}",
                 f(e.edge_width_mm),
@@ -530,13 +550,17 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 )
             });
         format!(
-            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({:.1}% of mean){noise}, FLIP {:.4}, region means {}{edge}; wrote {}",
+            "{} vs {}: sss {} transmittance {}: RMSE {:.4} ({} of mean){noise}, FLIP {:.4}, region means {}{edge}; wrote {}",
             r.scene,
             r.reference,
             r.sss.as_str().unwrap_or("?"),
             r.transmittance.as_str().unwrap_or("?"),
             r.rmse,
-            100.0 * r.rel_rmse,
+            r.rel_rmse
+                .map_or("n/a: black reference".into(), |v| format!(
+                    "{:.1}%",
+                    100.0 * v
+                )),
             r.flip_mean,
             regions.join(", "),
             r.out

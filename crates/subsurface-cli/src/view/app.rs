@@ -28,6 +28,8 @@ pub struct Script {
     pub screenshot: Option<PendingFile>,
     pub save_scene: Option<PathBuf>,
     pub lose_device_at: Option<u32>,
+    /// `--soak`: edits every frame and measures growth (`soak.rs`).
+    pub soak: Option<super::soak::Soak>,
 }
 
 pub struct App {
@@ -275,7 +277,11 @@ impl App {
         };
         let screenshot = script.screenshot.take();
         let save = script.save_scene.take();
+        let soak = script.soak.take();
         let result = (|| -> Result<()> {
+            if let Some(soak) = soak {
+                eprintln!("{}", soak.verdict()?);
+            }
             if let Some(g) = &self.gfx {
                 g.ctx.check().context("GPU error")?;
             }
@@ -365,6 +371,9 @@ impl App {
         }
         for a in actions {
             self.run_action(a);
+        }
+        if self.script.as_ref().is_some_and(|s| s.soak.is_some()) {
+            super::soak::Soak::edit(self.presented, &mut self.model, &window);
         }
         if let Err(e) = self.apply_edits() {
             let msg = format!("{e:#}");
@@ -488,8 +497,13 @@ impl App {
         self.presented += 1;
         self.model.stats.frames += 1;
 
-        let (lose_at, frames) = match &self.script {
-            Some(s) => (s.lose_device_at, s.frames),
+        let (lose_at, frames) = match &mut self.script {
+            Some(s) => {
+                if let (Some(soak), Some(g)) = (&mut s.soak, &self.gfx) {
+                    soak.sample(self.presented, (size.width, size.height), &g.ctx);
+                }
+                (s.lose_device_at, s.frames)
+            }
             None => return,
         };
         if lose_at == Some(self.presented) {

@@ -13,6 +13,7 @@ mod fonts;
 mod gfx;
 mod model;
 mod panel;
+mod soak;
 mod state;
 
 use std::path::PathBuf;
@@ -61,6 +62,10 @@ pub struct ViewArgs {
     /// With --frames: destroy the GPU device after this frame, to test recovery.
     #[arg(long, value_name = "FRAME", hide = true)]
     pub lose_device_at: Option<u32>,
+    /// With --frames: change the methods, lights and window size every frame and fail if
+    /// memory, GPU memory or wgpu objects grow (the viewer soak test).
+    #[arg(long, hide = true)]
+    pub soak: bool,
 }
 
 /// Loads the scene and applies the command line on top of it.
@@ -98,6 +103,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             ("--screenshot", args.screenshot.is_some()),
             ("--save-scene", args.save_scene.is_some()),
             ("--lose-device-at", args.lose_device_at.is_some()),
+            ("--soak", args.soak),
         ] {
             anyhow::ensure!(!given, "{flag}: needs --frames N (scripted mode)");
         }
@@ -120,6 +126,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         screenshot,
         save_scene: args.save_scene.clone(),
         lose_device_at: args.lose_device_at,
+        soak: args.soak.then(|| soak::Soak::new(frames)),
     });
     let size: winit::dpi::Size = match (args.settings.width, args.settings.height) {
         (None, None) => {

@@ -50,6 +50,22 @@ pub fn text(out: &Output) -> String {
     )
 }
 
+/// The single line on stderr of a command that failed with exit status 1, which must start
+/// with `error: `.
+pub fn error_line(out: &Output) -> String {
+    let s = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(1), "{s}");
+    // lavapipe itself prints "error: XDG_RUNTIME_DIR is invalid" without a display; not ours.
+    let lines: Vec<&str> = s
+        .lines()
+        .filter(|l| !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one line on stderr, got: {s}");
+    assert!(lines[0].starts_with("error: "), "{s}");
+    assert!(lines[0].len() > "error: ".len() + 5, "{s}");
+    lines[0].to_string()
+}
+
 /// Asserts that the command succeeded, showing its stderr if not.
 pub fn assert_success(out: &Output) {
     assert!(

@@ -71,17 +71,30 @@ impl Mesh {
     /// mesh stays counter-clockwise front-facing.
     pub fn transform(&mut self, m: Mat4) {
         let m3 = Mat3::from_mat4(m);
-        let det = m3.determinant();
-        let n3 = if det.abs() > 0.0 {
-            m3.inverse().transpose()
+        // Normals and tangents only need directions, so they are transformed by the 3x3 scaled
+        // to a largest entry of 1: an object scale of 1e-30 or 1e30 would otherwise underflow
+        // or overflow the f32 determinant and lengths, and every normal fell back to +z.
+        let big = m3
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |a, x| a.max(x.abs()));
+        let d3 = if big.is_finite() && big.recip().is_finite() {
+            m3 * big.recip()
         } else {
             m3
+        };
+        // Its sign says whether the transform mirrors (computed on `d3`, which cannot underflow).
+        let det = d3.determinant();
+        let n3 = if det.abs() > 0.0 {
+            d3.inverse().transpose()
+        } else {
+            d3
         };
         for v in &mut self.vertices {
             v.position = m.transform_point3(Vec3::from(v.position)).to_array();
             v.normal = (n3 * Vec3::from(v.normal)).normalize_or(Vec3::Z).to_array();
             let t = Vec4::from(v.tangent);
-            let t3 = (m3 * t.truncate()).normalize_or_zero();
+            let t3 = (d3 * t.truncate()).normalize_or_zero();
             let w = if det < 0.0 { -t.w } else { t.w };
             v.tangent = t3.extend(w).to_array();
         }
@@ -90,6 +103,25 @@ impl Mesh {
                 tri.swap(1, 2);
             }
         }
+    }
+
+    /// Whether the triangles cover at least `area` of UV space (the unit square is 1;
+    /// overlaps count twice). A glTF without `TEXCOORD_0` has every uv at the origin and
+    /// covers 0. Stops at the first triangles that reach `area`, so a real UV layout costs a
+    /// handful of triangles however large the mesh (the viewer asks on every edit).
+    pub fn uv_area_at_least(&self, area: f64) -> bool {
+        let mut sum = 0.0f64;
+        for tri in self.indices.chunks_exact(3) {
+            let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| {
+                let uv = self.vertices[i as usize].uv;
+                [f64::from(uv[0]), f64::from(uv[1])]
+            });
+            sum += ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs() / 2.0;
+            if sum >= area {
+                return true;
+            }
+        }
+        false
     }
 
     /// Computes smooth (area-weighted) vertex normals from the triangles.
@@ -181,6 +213,19 @@ mod tests {
     }
 
     #[test]
+    fn transform_at_extreme_scales_keeps_normals() {
+        let reference = Mesh::sphere(1.0, 8);
+        for s in [1e-30f32, 1e30] {
+            let mut m = reference.clone();
+            m.transform(Mat4::from_scale(Vec3::splat(s)));
+            for (a, b) in m.vertices.iter().zip(&reference.vertices) {
+                let (na, nb) = (Vec3::from(a.normal), Vec3::from(b.normal));
+                assert!(na.dot(nb) > 0.999, "scale {s}: {na} vs {nb}");
+            }
+        }
+    }
+
+    #[test]
     fn append_rebases_indices_and_bounds_cover_both() {
         let mut a = Mesh::slab(1.0, 1.0, 1.0);
         let mut b = Mesh::slab(1.0, 1.0, 1.0);
@@ -194,5 +239,16 @@ mod tests {
         assert_eq!(lo, Vec3::splat(-0.5));
         assert_eq!(hi, Vec3::new(3.5, 0.5, 0.5));
         assert_eq!(Mesh::default().bounds(), (Vec3::ZERO, Vec3::ZERO));
+    }
+
+    #[test]
+    fn uv_area_is_zero_without_uvs() {
+        let mut m = Mesh::sphere(1.0, 16);
+        assert!(m.uv_area_at_least(0.1));
+        for v in &mut m.vertices {
+            v.uv = [0.0, 0.0];
+        }
+        assert!(!m.uv_area_at_least(1e-12));
+        assert!(!Mesh::default().uv_area_at_least(1e-12));
     }
 }

@@ -155,7 +155,7 @@ fn load_object(
             image::imageops::flip_vertical_in_place(t);
         }
     }
-    Ok(Object {
+    let object = Object {
         name: if o.name.is_empty() {
             format!("object{index}")
         } else {
@@ -169,6 +169,40 @@ fn load_object(
         normal_texture,
         specular_texture,
         material: m.clone(),
+    };
+    check_world_extent(&object, o, index, file)?;
+    Ok(object)
+}
+
+/// The object in world space must fit in f32: a mesh extent times `scale` (or plus
+/// `translation`) past f32::MAX rendered nothing and exported infinite vertices, with exit 0.
+fn check_world_extent(
+    object: &Object,
+    o: &ObjectDesc,
+    index: usize,
+    file: &str,
+) -> Result<(), SceneError> {
+    let (lo, hi) = object.world_bounds();
+    if lo.is_finite() && hi.is_finite() {
+        return Ok(());
+    }
+    let (mlo, mhi) = object.mesh.bounds();
+    let extent = (mhi - mlo).max_element() * o.scale;
+    let (field, msg) = if extent.is_finite() {
+        (
+            "translation",
+            "the object's world-space bounds overflow 32-bit floats",
+        )
+    } else {
+        (
+            "scale",
+            "the mesh's extent times the scale overflows 32-bit floats",
+        )
+    };
+    Err(SceneError::Invalid {
+        file: file.to_string(),
+        field: format!("objects[{index}].{field}"),
+        msg: msg.to_string(),
     })
 }
 

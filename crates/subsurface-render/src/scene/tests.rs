@@ -273,6 +273,22 @@ fn invalid_camera() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("camera.target"), "{e}");
+    // Finite ends whose difference squared overflows f32: the direction normalised to 0/NaN.
+    let e = parse(
+        &MINIMAL
+            .replacen(
+                "position = [0.0, 0.0, 1.0]",
+                "position = [3e38, 0.0, 1.0]",
+                1,
+            )
+            .replacen("target = [0.0, 0.0, 0.0]", "target = [-3e38, 0.0, 0.0]", 1),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("t.toml: camera.target: must be within"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -302,6 +318,11 @@ fn invalid_lights() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("lights[0].target"), "{e}");
+    // A spot 3e38 away from its target: |d|^2 overflows and the direction normalised to 0.
+    let e = parse(&MINIMAL.replace("position = [0.0, 0.0, -1.0]", "position = [3e38, 0.0, 0.0]"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("lights[0].target: must be within"), "{e}");
     // point lights: angles and target are not checked beyond finiteness
     let ok = MINIMAL
         .replace(
@@ -361,6 +382,32 @@ fn invalid_objects() {
         "objects[0].mesh.segments",
     );
     mesh(r#"{ gltf = "" }"#, "objects[0].mesh.gltf");
+}
+
+/// Each number is valid, but the object in world space does not fit in f32: rejected when the
+/// scene loads, naming the field that overflowed.
+#[test]
+fn world_extent_past_f32_is_an_error() {
+    let load = |m: &str, more: &str| {
+        let s = MINIMAL.replace(
+            "mesh = { shape = \"slab\", width = 0.1, height = 0.1, thickness = 0.01 }",
+            &format!("mesh = {m}\n{more}"),
+        );
+        Scene::from_desc(parse(&s).unwrap(), Path::new("."), "t.toml").map(|_| ())
+    };
+    let sphere = r#"{ shape = "sphere", radius = 1e38, segments = 8 }"#;
+    let e = load(sphere, "scale = 3e38").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "t.toml: objects[0].scale: the mesh's extent times the scale overflows 32-bit floats"
+    );
+    let e = load(sphere, "translation = [3e38, 0.0, 0.0]")
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("t.toml: objects[0].translation: "), "{e}");
+    // Extreme but representable: fine.
+    load(sphere, "").unwrap();
+    load(r#"{ shape = "sphere", radius = 1e-30 }"#, "scale = 1e-30").unwrap();
 }
 
 #[test]

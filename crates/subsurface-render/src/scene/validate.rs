@@ -17,6 +17,10 @@ fn line_col(s: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// The longest target - position a camera or light may have: its square must stay a finite
+/// f32 for the direction to normalise.
+const MAX_SPAN: f32 = 1.8e19;
+
 struct Check<'a> {
     file: &'a str,
 }
@@ -137,6 +141,14 @@ impl SceneDesc {
         if dir.length_squared() == 0.0 {
             return Err(c.err("camera.target", "must differ from camera.position"));
         }
+        // The view direction is normalised in f32: past |d|^2 = f32::MAX it became (0, 0, 0)
+        // or NaN, and the frame was garbage.
+        if !dir.length_squared().is_finite() {
+            return Err(c.err(
+                "camera.target",
+                format!("must be within {MAX_SPAN:e} units of camera.position"),
+            ));
+        }
         let up = Vec3::from(cam.up);
         if up.cross(dir).length_squared() <= 1e-12 * up.length_squared() * dir.length_squared() {
             return Err(c.err(
@@ -175,6 +187,13 @@ impl SceneDesc {
                 return Err(c.err(
                     f("target"),
                     "must differ from position (it gives the light direction)",
+                ));
+            }
+            let span = Vec3::from(l.target) - Vec3::from(l.position);
+            if l.kind != LightKind::Point && !span.length_squared().is_finite() {
+                return Err(c.err(
+                    f("target"),
+                    format!("must be within {MAX_SPAN:e} units of position"),
                 ));
             }
             let s = l.shadow_map_size;

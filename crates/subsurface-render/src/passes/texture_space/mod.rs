@@ -58,6 +58,50 @@ pub struct TextureSpaceSettings {
     pub albedo_pre: f32,
 }
 
+/// Every skin object must have a UV layout when the texture-space maps are on: without
+/// `TEXCOORD_0` every vertex sits at uv (0, 0), the irradiance pass rasterises nothing, and
+/// the object renders black with no other sign of why. Less than one texel of coverage is
+/// treated the same way. Checked before anything is allocated, by `Renderer::new` and on
+/// every `Renderer::update` (the viewer can switch the method on).
+pub fn check_uvs(scene: &crate::Scene, settings: &TextureSpaceSettings) -> Result<(), RenderError> {
+    if !(settings.diffuse || settings.tsm) {
+        return Ok(());
+    }
+    let one_texel = 1.0 / (f64::from(settings.size) * f64::from(settings.size));
+    let bad = scene.objects.iter().enumerate().find(|(_, o)| {
+        o.material.sss_strength > 0.0
+            && !o.mesh.indices.is_empty()
+            && !o.mesh.uv_area_at_least(one_texel)
+    });
+    let Some((i, o)) = bad else { return Ok(()) };
+    let (field, source) = match scene.desc.objects.get(i).map(|d| &d.mesh) {
+        Some(crate::scene::MeshDesc::Gltf { path }) => (
+            format!("objects[{i}].mesh.gltf"),
+            format!("{path} ({})", o.name),
+        ),
+        _ => (format!("objects[{i}].mesh"), o.name.clone()),
+    };
+    let (method, instead) = if settings.diffuse {
+        (
+            "sss.method \"texture\"",
+            "a screen-space method (e.g. --sss separable)",
+        )
+    } else {
+        (
+            "transmittance.method \"tsm\"",
+            "another method (e.g. --transmittance paper)",
+        )
+    };
+    Err(RenderError::invalid(
+        field,
+        format!(
+            "{source} has no texture coordinates (no TEXCOORD_0, or its UVs cover less than \
+             one texel): {method} lays the skin out in UV space and would render it black; \
+             use {instead} or give the mesh UVs"
+        ),
+    ))
+}
+
 /// The maps of one skin object.
 struct ObjectMaps {
     irradiance: wgpu::Texture,

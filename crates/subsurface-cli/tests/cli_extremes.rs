@@ -1,0 +1,286 @@
+//! Inputs that are valid one number at a time but meet a limit together, and inputs a method
+//! cannot use: a mesh without UVs under the texture-space methods, a black or non-finite
+//! reference for `compare`, and values past what `export-mitsuba` can write (Mitsuba reads
+//! 32-bit floats). Each either works with well-defined output or fails with one `error:` line
+//! naming the field and leaves no output behind.
+
+mod common;
+
+use std::path::Path;
+
+use common::{assert_success, error_line, gpu_available, subsurface, tempdir, text};
+
+/// A GLB holding one quad (0.05 units square, in the xy plane, facing +z) with positions and
+/// indices only: no normals (computed) and, what matters here, no `TEXCOORD_0`.
+fn glb_without_uvs() -> Vec<u8> {
+    let p: [f32; 12] = [0., 0., 0., 0.05, 0., 0., 0.05, 0.05, 0., 0., 0.05, 0.];
+    let mut bin: Vec<u8> = p.iter().flat_map(|v| v.to_le_bytes()).collect();
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    let mut json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "buffers":[{{"byteLength":{}}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[0.05,0.05,0]}},
+        {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
+        bin.len()
+    )
+    .into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    for (kind, data) in [(b"JSON", &json), (b"BIN\0", &bin)] {
+        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        glb.extend_from_slice(kind);
+        glb.extend_from_slice(data);
+    }
+    glb
+}
+
+/// A 32x24 scene: the camera 0.2 in front of (0.025, 0.025, 0), a spot light beside it aimed
+/// at the origin with the `key = value` lines of `light` added, and one object given by the
+/// lines of `object` (its `mesh = ...` first).
+fn scene_toml(light: &str, object: &str) -> String {
+    format!(
+        r#"
+[camera]
+position = [0.025, 0.025, 0.2]
+target = [0.025, 0.025, 0.0]
+[render]
+width = 32
+height = 24
+[[lights]]
+kind = "spot"
+position = [0.0, 0.0, 0.2]
+shadow_map_size = 64
+{light}
+[[objects]]
+{object}
+"#
+    )
+}
+
+fn write_scene(dir: &Path, object: &str) {
+    std::fs::write(dir.join("s.toml"), scene_toml("", object)).unwrap();
+}
+
+#[test]
+fn texture_space_methods_on_a_mesh_without_uvs_fail_naming_the_object() {
+    let dir = tempdir("nouv");
+    if !gpu_available(&dir) {
+        return;
+    }
+    std::fs::write(dir.join("nouv.glb"), glb_without_uvs()).unwrap();
+    write_scene(&dir, r#"mesh = { gltf = "nouv.glb" }"#);
+    // The mesh itself is fine: screen-space scattering renders it.
+    assert_success(&subsurface(&["render", "s.toml", "-o", "ok.png"], &dir));
+    for (flags, method) in [
+        (["--sss", "texture"], "sss.method \"texture\""),
+        (["--transmittance", "tsm"], "transmittance.method \"tsm\""),
+    ] {
+        let mut args = vec!["render", "s.toml", "-o", "x.png", "--texture-size", "64"];
+        args.extend(flags);
+        let e = error_line(&subsurface(&args, &dir));
+        assert!(
+            e.starts_with(
+                "error: objects[0].mesh.gltf: nouv.glb (object0) has no texture coordinates"
+            ),
+            "{e}"
+        );
+        assert!(e.contains(method), "{e}");
+        assert!(!dir.join("x.png").exists(), "{e}: output written");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn write_exr(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) {
+    image::Rgb32FImage::from_fn(w, h, |x, y| image::Rgb([f(x, y); 3]))
+        .save(path)
+        .unwrap();
+}
+
+#[test]
+fn compare_against_a_black_reference_reports_no_nan() {
+    let dir = tempdir("black");
+    if !gpu_available(&dir) {
+        return;
+    }
+    write_scene(
+        &dir,
+        r#"mesh = { shape = "sphere", radius = 0.02, segments = 16 }
+translation = [0.025, 0.025, 0.0]"#,
+    );
+    write_exr(&dir.join("black.exr"), 32, 24, |_, _| 0.0);
+    let out = subsurface(&["compare", "black.exr", "s.toml", "--json"], &dir);
+    assert_success(&out);
+    let json = String::from_utf8_lossy(&out.stdout);
+    for bad in ["NaN", "nan", "inf"] {
+        assert!(!json.contains(bad), "{bad} in {json}");
+    }
+    let r: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(r["rmse"].as_f64().unwrap() > 0.0, "{json}");
+    assert!(r["rel_rmse"].is_null(), "{json}");
+    let skin = &r["regions"][0];
+    assert_eq!(skin["name"], "skin");
+    assert!(skin["pixels"].as_u64().unwrap() > 0, "{json}");
+    assert!(skin["rel_error"].is_null(), "{json}");
+    assert!(
+        skin["note"]
+            .as_str()
+            .unwrap()
+            .contains("reference is black"),
+        "{json}"
+    );
+    // The text report says so in words.
+    let out = subsurface(&["compare", "black.exr", "s.toml"], &dir);
+    assert_success(&out);
+    let t = text(&out);
+    assert!(t.contains("skin n/a (black reference)"), "{t}");
+    assert!(!t.contains("NaN") && !t.contains("inf"), "{t}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The reference is read before anything else, so no GPU is needed to reject it.
+#[test]
+fn compare_rejects_a_reference_with_nan_or_inf_pixels() {
+    let dir = tempdir("nanref");
+    write_scene(&dir, r#"mesh = { shape = "sphere", radius = 0.02 }"#);
+    for (name, bad) in [("nan.exr", f32::NAN), ("inf.exr", f32::INFINITY)] {
+        write_exr(&dir.join(name), 32, 24, |x, y| {
+            if (x, y) == (5, 3) { bad } else { 0.5 }
+        });
+        let e = error_line(&subsurface(
+            &["compare", name, "s.toml", "-o", "c.png"],
+            &dir,
+        ));
+        assert!(
+            e.starts_with(&format!("error: {name}: pixel (5, 3) is [")),
+            "{e}"
+        );
+        assert!(e.ends_with("the reference must be finite"), "{e}");
+        assert!(!dir.join("c.png").exists(), "{e}: output written");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// [`scene_toml`] with a skin sphere of `radius` and the `object` lines.
+fn export_scene(light: &str, radius: &str, object: &str) -> String {
+    scene_toml(
+        light,
+        &format!("mesh = {{ shape = \"sphere\", radius = {radius}, segments = 12 }}\n{object}"),
+    )
+}
+
+/// Every number in the attributes of `scene.xml` fits Mitsuba's 32-bit floats, and every
+/// float of every PLY is finite with unit normals.
+fn assert_finite_export(out: &Path, what: &str) {
+    let xml = std::fs::read_to_string(out.join("scene.xml")).unwrap();
+    let mut numbers = 0;
+    for value in xml.split("value=\"").skip(1) {
+        let value = &value[..value.find('"').unwrap()];
+        for token in value.split(',').map(str::trim) {
+            if let Ok(v) = token.parse::<f64>() {
+                numbers += 1;
+                assert!(v.abs() <= f64::from(f32::MAX), "{what}: {token} in {value}");
+            }
+        }
+        assert!(
+            !value.contains("NaN") && !value.contains("inf"),
+            "{what}: {value}"
+        );
+    }
+    assert!(numbers > 20, "{what}: only {numbers} numbers");
+    for ply in std::fs::read_dir(out.join("meshes")).unwrap() {
+        let bytes = std::fs::read(ply.unwrap().path()).unwrap();
+        let end = b"end_header\n";
+        let body = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+        let header = String::from_utf8_lossy(&bytes[..body]);
+        let n: usize = header
+            .lines()
+            .find_map(|l| l.strip_prefix("element vertex "))
+            .unwrap()
+            .parse()
+            .unwrap();
+        let floats: Vec<f32> = bytes[body..body + n * 24]
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        for v in floats.chunks_exact(6) {
+            assert!(v.iter().all(|x| x.is_finite()), "{what}: vertex {v:?}");
+            let len = (v[3] * v[3] + v[4] * v[4] + v[5] * v[5]).sqrt();
+            assert!((len - 1.0).abs() < 1e-3, "{what}: normal {v:?}");
+        }
+    }
+}
+
+#[test]
+fn export_mitsuba_writes_finite_numbers_at_the_extremes() {
+    let dir = tempdir("export-extremes");
+    let cases = [
+        ("intensity = 1e38", "0.04", ""),
+        ("color = [1e38, 0.0, 1.0]", "0.04", ""),
+        ("", "0.04", "scale = 1e-30"),
+        ("", "0.04", "scale = 1e30"),
+        ("", "1e-30", "scale = 1e-30"),
+        ("", "1e30", "translation = [1e38, 0.0, 0.0]"),
+        ("", "0.04", "material = { sss_width = 1e-30 }"),
+        ("", "0.04", "material = { sss_width = 3e38 }"),
+        ("", "0.04", "mm_per_unit = 1e-30"),
+    ];
+    for (i, (light, radius, object)) in cases.iter().enumerate() {
+        let what = format!("{light} {radius} {object}");
+        let scene = format!("s{i}.toml");
+        std::fs::write(dir.join(&scene), export_scene(light, radius, object)).unwrap();
+        let out = format!("out{i}");
+        let run = subsurface(&["export-mitsuba", &scene, "--out", &out], &dir);
+        assert!(run.status.success(), "{what}: {}", text(&run));
+        assert_finite_export(&dir.join(&out), &what);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn export_mitsuba_rejects_what_mitsuba_cannot_read_and_writes_nothing() {
+    let dir = tempdir("export-reject");
+    let cases = [
+        (
+            "intensity = 3e38\ncolor = [3e38, 3e38, 3e38]",
+            "0.04",
+            "",
+            "s.toml: lights[0].intensity: pi x color x intensity would be",
+        ),
+        (
+            "",
+            "0.04",
+            "mm_per_unit = 3e38\nscale = 1e-30",
+            "s.toml: objects[0].scale: the medium's sigma per scene unit",
+        ),
+        (
+            "",
+            "3e38",
+            "scale = 3e38",
+            "s.toml: objects[0].scale: the mesh's extent times the scale overflows",
+        ),
+        (
+            "target = [0.0, 0.0, 3e38]",
+            "0.04",
+            "",
+            "s.toml: lights[0].target: must be within",
+        ),
+    ];
+    for (light, radius, object, expected) in cases {
+        std::fs::write(dir.join("s.toml"), export_scene(light, radius, object)).unwrap();
+        let e = error_line(&subsurface(
+            &["export-mitsuba", "s.toml", "--out", "out"],
+            &dir,
+        ));
+        assert!(e.starts_with(&format!("error: {expected}")), "{e}");
+        assert!(!dir.join("out").exists(), "{e}: output directory created");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
