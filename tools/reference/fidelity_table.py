@@ -114,6 +114,8 @@ def write_markdown(results):
         def reg(v, r):
             se = (v.get("regions_stderr") or {}).get(r)
             pm = f" ±{100 * se:.1f}" if se is not None else ""
+            if v["regions"][r] is None:  # a black reference region: no relative error
+                return "n/a"
             return f"{100 * v['regions'][r]:+.1f}%{pm}"
 
         def opt(x, fmt):
