@@ -42,13 +42,15 @@ def main():
         for name in names:
             scene = os.path.join(ROOT, "scenes/canonical", name + ".toml")
             results[name] = {}
+            # Scenes with a shadow edge (knife-edge) or a thickness curve (wedge): the curves,
+            # plotted for every method.
+            regions = scene[:-5] + ".regions.json"
+            spec = json.load(open(regions)) if os.path.exists(regions) else {}
+            kind = "edge" if "edge" in spec else "thickness" if "thickness" in spec else None
             for sss, tr in COMBOS:
                 key = f"{sss}+{tr}"
                 img = f"references/compare/{name}--{sss}--{tr}.png"
                 out = os.path.join(ROOT, img) if (sss, tr) in KEEP_IMAGES else os.path.join(tmp, "x.png")
-                # Scenes with a shadow edge (knife-edge): the curves across it, for every method.
-                spec = json.load(open(scene[:-5] + ".regions.json")) if os.path.exists(scene[:-5] + ".regions.json") else {}
-                kind = "edge" if "edge" in spec else "thickness" if "thickness" in spec else None
                 plot = f"references/compare/{name}--{sss}--{tr}.{kind}.png" if kind else None
                 r = subprocess.run(
                     [exe, "compare", os.path.join(ROOT, "references", name + ".exr"), scene,

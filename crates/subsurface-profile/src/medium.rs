@@ -12,7 +12,7 @@ use crate::error::{CHANNELS, Result, positive};
 use crate::materials::{JENSEN2001_ETA, Material, material};
 
 /// `medium = "skin1"` or `medium = { sigma_a = [..], sigma_s = [..], eta = 1.3 }` in a scene.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Medium {
     /// A preset of [`crate::material_names`].
@@ -32,6 +32,30 @@ pub struct Coefficients {
     /// Relative index of refraction of the boundary, in 1..=10 (default 1.3, Jensen 2001's).
     #[serde(default = "default_eta")]
     pub eta: f64,
+}
+
+impl<'de> Deserialize<'de> for Medium {
+    /// As the untagged enum it is, but with an error that says what is expected: serde's own
+    /// ("did not match any variant of untagged enum Medium") names neither form.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Preset(String),
+            Coefficients(Coefficients),
+        }
+        Raw::deserialize(d)
+            .map(|r| match r {
+                Raw::Preset(name) => Medium::Preset(name),
+                Raw::Coefficients(c) => Medium::Coefficients(c),
+            })
+            .map_err(|_| {
+                serde::de::Error::custom(
+                    "expected a preset name such as \"skin1\" or a table { sigma_a = [r, g, b], \
+                     sigma_s = [r, g, b], eta = 1.3 } (three numbers each, eta optional)",
+                )
+            })
+    }
 }
 
 fn default_eta() -> f64 {
@@ -156,7 +180,12 @@ mod tests {
             let e = m.material().unwrap_err().to_string();
             assert!(e.starts_with(field), "{e}");
         }
-        assert!(parse(r#"{"medium": {"sigma_a": [1, 1, 1]}}"#).is_err());
+        // Neither form: the error says what either form looks like.
+        let e = parse(r#"{"medium": {"sigma_a": [1, 1, 1]}}"#).unwrap_err();
+        assert!(
+            e.contains("\"skin1\"") && e.contains("sigma_s = [r, g, b]"),
+            "{e}"
+        );
         assert!(
             Medium::Preset("velvet".into())
                 .material()

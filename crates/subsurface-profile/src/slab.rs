@@ -122,22 +122,27 @@ impl SlabTransmittance {
         const MIN_HITS: u32 = 100;
         let last = (points - 1) as f64;
         let mut data = vec![[0.0f64; 3]; points];
-        let total_t = |s: f64, c: usize| -> Result<f64> {
-            Ok(
-                Multipole::new(*dipole, s.max(1e-3), Multipole::DEFAULT_PAIRS)?
-                    .total_transmittance()[c],
-            )
-        };
+        let thickness = |i: usize| (i as f64 / last * s_max_mm).max(1e-3);
+        // The multipole's total transmittance at every thickness, once for all channels.
+        let diffusion = (0..points)
+            .map(|i| {
+                Ok(
+                    Multipole::new(*dipole, thickness(i), Multipole::DEFAULT_PAIRS)?
+                        .total_transmittance(),
+                )
+            })
+            .collect::<Result<Vec<[f64; 3]>>>()?;
         for c in 0..3 {
             let ch = dipole.channel(c);
             // Multipole-to-walk ratio once the walk runs out of samples.
             let mut join: Option<f64> = None;
             for i in 0..points {
-                let s = (i as f64 / last * s_max_mm).max(1e-3);
+                let t = diffusion[i][c];
                 if let Some(k) = join {
-                    data[i][c] = (k * total_t(s, c)?).max(0.0);
+                    data[i][c] = (k * t).max(0.0);
                     continue;
                 }
+                let s = thickness(i);
                 let (l, hits) = slab_radiance(
                     ch.sigma_t_prime,
                     ch.alpha_prime,
@@ -146,17 +151,13 @@ impl SlabTransmittance {
                     walks,
                     c as u64,
                 );
-                let t_prev = if i > 0 {
-                    total_t((i - 1) as f64 / last * s_max_mm, c)?
-                } else {
-                    0.0
-                };
+                let t_prev = if i > 0 { diffusion[i - 1][c] } else { 0.0 };
                 // The multipole holds from a couple of mean free paths on (it is negative
                 // below), so it takes over only there.
                 if hits < MIN_HITS && s * ch.sigma_t_prime > 2.0 && t_prev > 0.0 {
                     let k = data[i - 1][c] / t_prev;
                     join = Some(k);
-                    data[i][c] = (k * total_t(s, c)?).max(0.0);
+                    data[i][c] = (k * t).max(0.0);
                 } else {
                     data[i][c] = l;
                 }
