@@ -248,6 +248,15 @@ fn f(v: &serde_json::Value, k: &str) -> f64 {
 /// The default method (`subsurface render` with no flags): what the guard holds to its record.
 const DEFAULT: (&str, &str) = ("separable", "diffusion");
 
+/// Issue 13's target: every region mean within this of the path tracer...
+const REGION_TARGET: f64 = 0.20;
+/// ...except these, which docs/fidelity.md lists with their cause (lateral spread through
+/// round fingers; the diffusion source displaced by oblique incidence at the knife edge).
+const KNOWN_MISSES: [(&str, &str); 2] = [
+    ("hand-backlit", "fingers"),
+    ("knife-edge", "under the blade"),
+];
+
 #[test]
 fn regression_guard_against_committed_references() {
     let recorded: serde_json::Value = serde_json::from_str(
@@ -308,6 +317,14 @@ fn regression_guard_against_committed_references() {
                 "{name}: region {region} mean error {got:+.3} vs recorded {want:+.3}"
             );
         }
+        for (region, got) in &regions {
+            if !KNOWN_MISSES.contains(&(name.as_str(), region.as_str())) {
+                assert!(
+                    got.abs() <= REGION_TARGET,
+                    "{name}: region {region} mean error {got:+.3} outside the +-20 % target"
+                );
+            }
+        }
         // Better than no scattering and no transmittance: worse on neither measure, better
         // on at least one. (Where the reference's noise exceeds every method's error, as on
         // the front-lit head at 256 spp, the noise-corrected RMSE is 0 for all of them and
@@ -331,6 +348,13 @@ fn regression_guard_against_committed_references() {
                     "{name}: edge width channel {c} {got:.3} mm vs recorded {want:.3} mm"
                 );
             }
+            // The issue's target: the blur's red rise within 15 % of the path tracer's.
+            let red = good["edge"]["edge_width_mm"][0].as_f64().unwrap();
+            let red_ref = good["edge"]["edge_width_mm_reference"][0].as_f64().unwrap();
+            assert!(
+                (red - red_ref).abs() <= 0.15 * red_ref,
+                "{name}: red edge width {red:.2} mm vs the reference's {red_ref:.2} mm"
+            );
         }
         // What FLIP sees is what `subsurface render` writes (CPU tone map = GPU tone map).
         assert!(

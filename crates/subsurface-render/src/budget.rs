@@ -17,6 +17,9 @@ const FRAME_BYTES_PER_PIXEL: u64 = 8 + 8 + 4 + 8 + 4 + 4 + 4 * 8;
 /// (Rg32Float), and the blur's temporary, ping, pong, accumulation, result and widest
 /// Gaussian (Rgba16Float each).
 const TEXTURE_SPACE_BYTES_PER_TEXEL: u64 = 8 + 8 + 6 * 8;
+/// Bytes per texel of a shadow-map layer: distance and entry normal (Rg32Float), the depth
+/// buffer it is drawn with (Depth32Float), translucent shadow maps' (u, v) (Rg32Float).
+const SHADOW_BYTES_PER_TEXEL: u64 = 8 + 4 + 8;
 
 /// The limit in force.
 pub fn limit_bytes() -> u64 {
@@ -82,7 +85,7 @@ pub fn check(scene: &Scene, s: &RenderSettings) -> Result<(), RenderError> {
             } else {
                 1
             };
-            l.shadow_map_size as u64 * l.shadow_map_size as u64 * layers * 8
+            l.shadow_map_size as u64 * l.shadow_map_size as u64 * layers * SHADOW_BYTES_PER_TEXEL
         })
         .sum();
     if frame + shadow > limit {

@@ -94,6 +94,8 @@ pub fn object_uniform(
         profile: profile_row,
         extinction: optics.sigma_t,
         lut_range_mm,
+        eta: optics.dipole.eta as f32,
+        _pad: [0.0; 3],
     }
 }
 

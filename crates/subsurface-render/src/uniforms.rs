@@ -83,6 +83,9 @@ pub struct ObjectUniform {
     pub extinction: [f32; 3],
     /// Thickness range of the T(s) LUT in mm.
     pub lut_range_mm: f32,
+    /// Relative index of refraction of the medium's boundary (the ballistic transmission lobe).
+    pub eta: f32,
+    pub _pad: [f32; 3],
 }
 
 #[repr(C)]

@@ -153,11 +153,12 @@ fn backlit_slab_transmits_the_analytic_colour() {
     let got = diffuse[(h / 2 * w + w / 2) as usize];
     let want = skin_t(thickness * 1000.0 - SHRINK * 1000.0).map(|t| t * 1.3);
     assert_transmits(got, want, "analytic");
-    // Beer-Lambert with skin1's extinction: exp(-sigma_t s) x E.
+    // Beer-Lambert with skin1's extinction: exp(-sigma_t s) x E, s measured from the shaded
+    // point itself (only `paper` keeps 000_*'s thickness from the shrunk point).
     let (diffuse, _) = render_diffuse(&s, w, h, TransmittanceMethod::Beer);
     let got = diffuse[(h / 2 * w + w / 2) as usize];
     let sigma_t = [0.772f32, 1.05, 1.49];
-    let want = sigma_t.map(|s| (-s * (thickness * 1000.0 - SHRINK * 1000.0)).exp() * 1.3);
+    let want = sigma_t.map(|s| (-s * thickness * 1000.0).exp() * 1.3);
     assert_transmits(got, want, "Beer-Lambert");
 }
 
@@ -387,7 +388,9 @@ fn no_transmittance_where_the_surface_faces_the_light() {
 }
 
 /// `diffusion`: a 6 mm slab of skin lit from behind passes what the multipole says a 6 mm
-/// slab of skin1 transmits (T_t / R_d, times E = 1.3), far more red than the Gaussian T(s).
+/// slab of skin1 transmits (T_t / R_d, times the entry face's irradiance E = 1), far more red
+/// than the Gaussian T(s). The thickness is measured from the shaded point itself (the normal
+/// shrink only finds the entry texel), so it is the slab's own 6 mm.
 #[test]
 fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
     if context().is_none() {
@@ -401,13 +404,7 @@ fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
     let (diffusion, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     let (paper, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Paper);
     let centre = (32 * 64 + 32) as usize;
-    let skin1 =
-        subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
-    let s_mm = thickness * 1000.0 - SHRINK * 1000.0;
-    let want = subsurface_profile::TransmittanceLut::diffusion(&skin1, 2048, 32.0)
-        .unwrap()
-        .sample(s_mm)
-        .map(|t| t * 1.3);
+    let want = skin1_diffusion_t(thickness * 1000.0);
     let got = diffusion[centre];
     assert_transmits(got, want, "multipole");
     assert!(want[0] > 0.3, "6 mm of skin1 should pass red: {want:?}");
@@ -415,5 +412,80 @@ fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
         got[0] > 100.0 * paper[centre][0],
         "diffusion {got:?} vs paper {:?}",
         paper[centre]
+    );
+}
+
+fn skin1_diffusion_t(s_mm: f32) -> [f32; 3] {
+    let skin1 =
+        subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
+    subsurface_profile::TransmittanceLut::diffusion(&skin1, 2048, 32.0)
+        .unwrap()
+        .sample(s_mm)
+}
+
+/// `diffusion` lights the back by the entry face's own irradiance, E cos(theta), from the normal
+/// the shadow map stores: a 3 mm slab turned 60 degrees to the light receives E / 2 and is
+/// crossed along a 6 mm chord (000_*'s wrapped front normal would give 0.3 + 0.5).
+#[test]
+fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
+    if context().is_none() {
+        return;
+    }
+    let s = backlit(
+        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.003 }\nrotation_deg = [0.0, 60.0, 0.0]",
+        2048,
+    );
+    let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
+    // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:
+    // on a 60 degree slope that entry is 0.1 sin 60 tan 60 = 0.15 mm nearer.
+    let want = skin1_diffusion_t(6.0 - 0.15).map(|t| t * 0.5);
+    assert_transmits(diffuse[32 * 64 + 32], want, "E cos 60 x T(6 mm)");
+}
+
+/// `diffusion`'s unscattered part: a 1 mm slab lit from straight behind passes
+/// exp(-sigma_t s) of the light on, through two Fresnel transmissions, spread by the rough
+/// boundary into a Gaussian lobe of sigma = alpha (eta - 1) around the light's direction
+/// (0.09 rad for roughness 0.3 and eta 1.3). It lands in the specular target (the material's
+/// specular is 0 here), and `paper` has none of it.
+#[test]
+fn thin_slab_passes_unscattered_light_in_a_lobe_of_the_boundary_roughness() {
+    if context().is_none() {
+        return;
+    }
+    let s = backlit(
+        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }",
+        1024,
+    );
+    let ctx = context().unwrap();
+    let specular = |method| {
+        let mut opts = options(&s, 64, 64);
+        opts.settings.sss.method = SssMethod::None;
+        opts.settings.transmittance.method = method;
+        let mut r = Renderer::new(&ctx, &s, opts).unwrap();
+        r.render().unwrap();
+        r.read_specular().unwrap()
+    };
+    let spec = specular(TransmittanceMethod::Diffusion);
+    let (alpha, eta) = (0.3f32, 1.3f32);
+    let sigma = alpha * (eta - 1.0);
+    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let peak =
+        [0.772f32, 1.05, 1.49].map(|st| (1.0 - f0).powi(2) * (-st).exp() / (2.0 * sigma * sigma));
+    // Pixel (32, 32) looks 0.003 rad off the axis: the lobe there is the peak.
+    assert_transmits(spec[32 * 64 + 32], peak, "unscattered peak");
+    // Column 44 looks theta = atan(0.39 tan 10 deg) off the axis.
+    let tan = ((44.5f32 / 64.0) * 2.0 - 1.0) * 10f32.to_radians().tan();
+    let falloff = (-(tan.atan().powi(2)) / (2.0 * sigma * sigma)).exp();
+    assert!((0.6..0.9).contains(&falloff));
+    assert_transmits(
+        spec[32 * 64 + 44],
+        peak.map(|p| p * falloff),
+        "lobe at 0.069 rad",
+    );
+    let paper = specular(TransmittanceMethod::Paper);
+    assert!(
+        paper[32 * 64 + 32][0].abs() < 1e-6,
+        "{:?}",
+        paper[32 * 64 + 32]
     );
 }

@@ -57,6 +57,7 @@ struct Object {
     profile: u32,          // row of the screen-space SSS profile table
     extinction: vec3<f32>, // Beer-Lambert sigma_t, 1/mm
     lut_range_mm: f32,     // thickness range of the T(s) LUT
+    eta: f32,              // relative index of refraction of the boundary
 };
 
 @group(1) @binding(0) var<uniform> object: Object;
@@ -106,4 +107,26 @@ fn world_normal(v: VertexIn) -> vec3<f32> {
 
 fn world_tangent(v: VertexIn) -> vec4<f32> {
     return vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
+}
+
+// The shadow map's second channel: the normal of the surface the light sees, octahedral with
+// 12 bits a component, stored as an integer-valued f32 (exact below 2^24, so no bit pattern
+// can be a NaN or a denormal that a float render target might flush).
+fn encode_normal(n: vec3<f32>) -> f32 {
+    var p = n.xy / max(abs(n.x) + abs(n.y) + abs(n.z), 1e-20);
+    if (n.z < 0.0) {
+        p = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    let q = round(clamp(p * 0.5 + vec2<f32>(0.5), vec2<f32>(0.0), vec2<f32>(1.0)) * 4095.0);
+    return q.x * 4096.0 + q.y;
+}
+
+fn decode_normal(f: f32) -> vec3<f32> {
+    let x = floor(f / 4096.0);
+    let p = vec2<f32>(x, f - x * 4096.0) / 4095.0 * 2.0 - vec2<f32>(1.0);
+    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
+    if (n.z < 0.0) {
+        n = vec3<f32>((vec2<f32>(1.0) - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
 }

@@ -113,11 +113,14 @@ fn beckmann(ndoth: f32, m: f32) -> f32 {
     return exp(-tan2 / m2) / (m2 * c2 * c2);
 }
 
-// Schlick's Fresnel with skin's F0 = 0.028 (index of refraction 1.4).
+// Schlick's Fresnel with F0 of the medium's boundary, ((eta - 1) / (eta + 1))^2: 0.017 for
+// the measured media's 1.3 (d'Eon's 0.028 is skin at 1.4), so the specular is the reflection of
+// the same boundary the path tracer renders.
 fn fresnel(h: vec3<f32>, v: vec3<f32>) -> f32 {
     let base = 1.0 - max(dot(v, h), 0.0);
     let e = pow(base, 5.0);
-    return e + 0.028 * (1.0 - e);
+    let r = (object.eta - 1.0) / (object.eta + 1.0);
+    return e + r * r * (1.0 - e);
 }
 
 // Kelemen/Szirmay-Kalos specular BRDF times cos: rho_s * P_H * F / |L + V|^2 * (N.L).
@@ -211,8 +214,9 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             continue;
         }
         s.irradiance += radiance * shadow * max(dot(n, l), 0.0);
-        s.transmitted += radiance * transmittance(light, world, n_vertex, l, shadow);
-        s.specular += radiance * shadow * ks_specular(n, l, v, m, rho_s);
+        let t = transmittance(light, world, n_vertex, l, v, shadow);
+        s.transmitted += radiance * t.diffuse;
+        s.specular += radiance * (shadow * ks_specular(n, l, v, m, rho_s) + t.ballistic);
     }
     return s;
 }

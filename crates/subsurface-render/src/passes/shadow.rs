@@ -1,6 +1,8 @@
-//! Shadow maps that store linear light distance (scene units) in an R32Float array texture.
-//! Jimenez et al. 2010 read thickness from exactly such standard maps, so transmittance needs
-//! no extra shadow data.
+//! Shadow maps that store linear light distance (scene units) in the first channel of an
+//! Rg32Float array texture. Jimenez et al. 2010 read thickness from exactly such standard maps;
+//! the second channel holds the normal of the surface the light sees (octahedral, 12 bits a
+//! component as an integer-valued float), which the `diffusion` transmittance needs for the
+//! back irradiance and the direction of the light crossing thin parts unscattered.
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
@@ -9,7 +11,7 @@ use crate::passes::util;
 use crate::uniforms::{ShadowViewUniform, mat, v4};
 
 pub const SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("shadow.wgsl"));
-pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// All shadow maps ([`util::LayeredPass::atlas`]): one layer per spot/directional light, six
 /// per point light.
