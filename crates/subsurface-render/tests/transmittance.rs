@@ -27,18 +27,24 @@ fn backlit_material(object: &str, shadow_map_size: u32, profile: &str) -> Scene 
     )
 }
 
-fn render_diffuse(
-    scene: &Scene,
-    w: u32,
-    h: u32,
-    method: TransmittanceMethod,
-) -> (Vec<[f32; 4]>, Vec<f32>) {
+/// One frame of `scene` without SSS, with transmittance `method`.
+fn render(scene: &Scene, w: u32, h: u32, method: TransmittanceMethod) -> Renderer {
     let ctx = context().unwrap();
     let mut opts = options(scene, w, h);
     opts.settings.sss.method = SssMethod::None;
     opts.settings.transmittance.method = method;
     let mut r = Renderer::new(&ctx, scene, opts).unwrap();
     r.render().unwrap();
+    r
+}
+
+fn render_diffuse(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    method: TransmittanceMethod,
+) -> (Vec<[f32; 4]>, Vec<f32>) {
+    let r = render(scene, w, h, method);
     (r.read_diffuse().unwrap(), r.read_linear_depth().unwrap())
 }
 
@@ -456,15 +462,7 @@ fn thin_slab_passes_unscattered_light_in_a_lobe_of_the_boundary_roughness() {
         "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }",
         1024,
     );
-    let ctx = context().unwrap();
-    let specular = |method| {
-        let mut opts = options(&s, 64, 64);
-        opts.settings.sss.method = SssMethod::None;
-        opts.settings.transmittance.method = method;
-        let mut r = Renderer::new(&ctx, &s, opts).unwrap();
-        r.render().unwrap();
-        r.read_specular().unwrap()
-    };
+    let specular = |method| render(&s, 64, 64, method).read_specular().unwrap();
     let spec = specular(TransmittanceMethod::Diffusion);
     let (alpha, eta) = (0.3f32, 1.3f32);
     let sigma = alpha * (eta - 1.0);

@@ -4,24 +4,30 @@
 // Mean linear light distance over an N x N texel footprint around the projected point: the
 // softer thickness that 000_* suggests (a single texel turns shadow-map aliasing into
 // high-frequency transmitted light). Empty texels (nothing seen by the light) are skipped.
-fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> f32 {
+// x: the mean distance (< 0 if every texel is empty); y: the centre texel's encoded entry
+// normal (< 0 if that texel is empty).
+fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> vec2<f32> {
     let size = light.shadow_uv_scale / light.atlas_texel;
     let centre = vec2<i32>(floor(sc.uv * size));
     let max_texel = vec2<i32>(i32(size) - 1);
     let h = max(taps, 1) / 2;
     var sum = 0.0;
     var n = 0.0;
+    var normal = -1.0;
     for (var j = -h; j <= h; j++) {
         for (var i = -h; i <= h; i++) {
             let texel = clamp(centre + vec2<i32>(i, j), vec2<i32>(0), max_texel);
-            let d = textureLoad(shadow_atlas, texel, sc.layer, 0).r;
-            if (d < 1e30) {
-                sum += d;
+            let d = textureLoad(shadow_atlas, texel, sc.layer, 0).rg;
+            if (d.x < 1e30) {
+                sum += d.x;
                 n += 1.0;
+                if (i == 0 && j == 0) {
+                    normal = d.y;
+                }
             }
         }
     }
-    return select(-1.0, sum / max(n, 1.0), n > 0.0);
+    return vec2<f32>(select(-1.0, sum / max(n, 1.0), n > 0.0), normal);
 }
 
 const PI: f32 = 3.14159265;
@@ -50,15 +56,23 @@ fn diffusion_transmittance(s_mm: f32) -> vec3<f32> {
     return lut_row(s_mm, DIFFUSION_RANGE_MM, 0.75);
 }
 
-// Light transmitted through thin parts (Jimenez et al. 2010): thickness from the standard
-// linear-depth shadow map, T(s) of the material's profile, back irradiance from the vertex
-// normal. Returns T(s) * E, to be multiplied by the light's radiance and the albedo.
-// The thickness s between where `light` enters the object and `p`, in millimetres of the
-// object's profile; < 0 where it is unknown (no shadow map, outside it, not translucent).
-fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
+// Where `light` enters the object on its way to `p`, read from the standard linear-distance
+// shadow map (Jimenez et al. 2010).
+struct Entry {
+    // The thickness s between the entry and p, in millimetres of the object's profile; < 0
+    // where it is unknown (no shadow map, outside it, not translucent).
+    s_mm: f32,
+    // The normal of the entry surface, turned toward the light; zero where unknown.
+    normal: vec3<f32>,
+};
+
+fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
+    var e: Entry;
+    e.s_mm = -1.0;
+    e.normal = vec3<f32>(0.0);
     // Only lights with a shadow map know the thickness: the others add nothing (no glow).
     if (light.first_layer < 0.0 || object.translucency <= 0.0) {
-        return -1.0;
+        return e;
     }
     // Shrink along the vertex normal so points at the silhouette project inside the object
     // in the shadow map rather than onto background texels (000_*, instead of Green's growing
@@ -66,11 +80,15 @@ fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     let shrunk = p - n_vertex * lights.normal_shrink;
     let sc = shadow_coord(light, shrunk);
     if (!sc.inside) {
-        return -1.0;
+        return e;
     }
-    let d_in = shadow_distance(light, sc, i32(lights.thickness_filter));
+    let texels = shadow_distance(light, sc, i32(lights.thickness_filter));
+    let d_in = texels.x;
     if (d_in < 0.0) {
-        return -1.0;
+        return e;
+    }
+    if (texels.y >= 0.0) {
+        e.normal = decode_normal(texels.y);
     }
     // 000_* measures from the shrunk point too, which makes every part thinner by the shrink
     // (0.5 mm in the canonical scenes: +15 % of red diffusion through thick parts, 1.5x the
@@ -79,7 +97,8 @@ fn light_thickness_mm(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     let measured_at = select(p, shrunk, lights.transmittance == 1u);
     let s_units = abs(light_distance(light.kind, light.position, light.direction, measured_at) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
-    return s_units / (object.world_per_mm * object.translucency);
+    e.s_mm = s_units / (object.world_per_mm * object.translucency);
+    return e;
 }
 
 // The back-irradiance factor of `transmittance`: the 0.3 lets light wrap around thin edges
@@ -100,28 +119,12 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
         if (back_irradiance(n_vertex, l) <= 0.0) {
             continue;
         }
-        let s = light_thickness_mm(light, p, n_vertex);
+        let s = light_entry(light, p, n_vertex).s_mm;
         if (s >= 0.0 && (best < 0.0 || s < best)) {
             best = s;
         }
     }
     return best;
-}
-
-// The normal of the surface where this light enters the object on its way to `p` (the shadow
-// map's second channel, turned toward the light); zero where unknown.
-fn entry_normal(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> vec3<f32> {
-    let sc = shadow_coord(light, p - n_vertex * lights.normal_shrink);
-    if (!sc.inside) {
-        return vec3<f32>(0.0);
-    }
-    let size = light.shadow_uv_scale / light.atlas_texel;
-    let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
-    let texel_data = textureLoad(shadow_atlas, texel, sc.layer, 0);
-    if (texel_data.r >= 1e30) {
-        return vec3<f32>(0.0);
-    }
-    return decode_normal(texel_data.g);
 }
 
 // Light that crosses a thin part without scattering (our extension of `diffusion`): the
@@ -170,7 +173,8 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     if (method == 0u || method == 4u || method > 5u) {
         return out;
     }
-    let s_mm = light_thickness_mm(light, p, n_vertex);
+    let entry = light_entry(light, p, n_vertex);
+    let s_mm = entry.s_mm;
     if (s_mm < 0.0) {
         return out;
     }
@@ -201,7 +205,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
             // the shadow map says, so nothing is counted twice: there the shadow test (which
             // the bias makes pass through the last half millimetre of a thin edge) must not
             // switch the transmitted light off.
-            let n_back = entry_normal(light, p, n_vertex);
+            let n_back = entry.normal;
             if (dot(n_back, n_back) > 0.5) {
                 let unlit = select(1.0 - lit, 1.0, dot(n_vertex, l) <= 0.0);
                 out.diffuse = diffusion_transmittance(s_mm) * max(dot(n_back, l), 0.0) * unlit;
@@ -232,7 +236,7 @@ fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) 
     if (!sc.inside) {
         return vec3<f32>(0.0);
     }
-    let d_in = shadow_distance(light, sc, i32(lights.thickness_filter));
+    let d_in = shadow_distance(light, sc, i32(lights.thickness_filter)).x;
     if (d_in < 0.0) {
         return vec3<f32>(0.0);
     }
