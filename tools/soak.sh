@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The viewer soak (issue 15): `subsurface view --frames FRAMES --soak` in a window (under
 # xvfb-run when there is no display), every frame changing the SSS and transmittance methods,
-# the exposure, a light and the window size (1x1 included). Prints a line per 12-frame cycle
+# the exposure, a light and the window size (1x1 included, and minimised to 0x0). Prints a line per 12-frame cycle
 # and the verdict: resident memory from the middle of the run to its end (limit +1 %), GPU
 # allocator bytes (+0.1 %) and live wgpu objects (no growth). Exits non-zero on growth or on
 # any GPU validation error. CI runs 120 frames (crates/subsurface-cli/tests/view.rs).

@@ -12,17 +12,32 @@ use common::{assert_success, error_line, gpu_available, subsurface, tempdir, tex
 
 /// A GLB holding one quad (0.05 units square, in the xy plane, facing +z) with positions and
 /// indices only: no normals (computed) and, what matters here, no `TEXCOORD_0`.
-fn glb_without_uvs() -> Vec<u8> {
+/// A GLB with one quad primitive per entry of `uvs` (all on the same vertices), each with
+/// `TEXCOORD_0` where its entry is true.
+fn glb_quads(uvs: &[bool]) -> Vec<u8> {
     let p: [f32; 12] = [0., 0., 0., 0.05, 0., 0., 0.05, 0.05, 0., 0., 0.05, 0.];
+    let uv: [f32; 8] = [0., 0., 1., 0., 1., 1., 0., 1.];
     let mut bin: Vec<u8> = p.iter().flat_map(|v| v.to_le_bytes()).collect();
     bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    bin.extend([0u8; 4]);
+    bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
+    let primitives: Vec<String> = uvs
+        .iter()
+        .map(|&has| {
+            let t = if has { r#","TEXCOORD_0":2"# } else { "" };
+            format!(r#"{{"attributes":{{"POSITION":0{t}}},"indices":1}}"#)
+        })
+        .collect();
     let mut json = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
-        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "meshes":[{{"primitives":[{}]}}],
         "buffers":[{{"byteLength":{}}}],
-        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}},
+        {{"buffer":0,"byteOffset":64,"byteLength":32}}],
         "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[0.05,0.05,0]}},
-        {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
+        {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}},
+        {{"bufferView":2,"componentType":5126,"count":4,"type":"VEC2"}}]}}"#,
+        primitives.join(","),
         bin.len()
     )
     .into_bytes();
@@ -75,7 +90,7 @@ fn texture_space_methods_on_a_mesh_without_uvs_fail_naming_the_object() {
     if !gpu_available(&dir) {
         return;
     }
-    std::fs::write(dir.join("nouv.glb"), glb_without_uvs()).unwrap();
+    std::fs::write(dir.join("nouv.glb"), glb_quads(&[false])).unwrap();
     write_scene(&dir, r#"mesh = { gltf = "nouv.glb" }"#);
     // The mesh itself is fine: screen-space scattering renders it.
     assert_success(&subsurface(&["render", "s.toml", "-o", "ok.png"], &dir));
@@ -95,6 +110,42 @@ fn texture_space_methods_on_a_mesh_without_uvs_fail_naming_the_object() {
         assert!(e.contains(method), "{e}");
         assert!(!dir.join("x.png").exists(), "{e}: output written");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A mesh where only some primitives have UVs covers UV space, so the coverage test passed
+/// it and texture-space diffusion drew the primitives without UVs black with exit 0.
+#[test]
+fn texture_space_on_a_mesh_with_some_primitives_without_uvs_names_the_primitive() {
+    let dir = tempdir("someuv");
+    if !gpu_available(&dir) {
+        return;
+    }
+    std::fs::write(dir.join("some.glb"), glb_quads(&[true, false, true])).unwrap();
+    write_scene(&dir, r#"mesh = { gltf = "some.glb" }"#);
+    let args = [
+        "render",
+        "s.toml",
+        "-o",
+        "x.png",
+        "--texture-size",
+        "64",
+        "--sss",
+        "texture",
+    ];
+    let e = error_line(&subsurface(&args, &dir));
+    assert!(
+        e.starts_with(
+            "error: objects[0].mesh.gltf: some.glb (object0) 2 of its 6 triangles have no \
+             texture coordinates (mesh 0 primitive 1 has no TEXCOORD_0)"
+        ),
+        "{e}"
+    );
+    assert!(!dir.join("x.png").exists(), "{e}: output written");
+    // With UVs on every primitive the same file renders in texture space.
+    std::fs::write(dir.join("some.glb"), glb_quads(&[true, true])).unwrap();
+    assert_success(&subsurface(&args, &dir));
+    assert!(dir.join("x.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

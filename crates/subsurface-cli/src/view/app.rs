@@ -13,6 +13,7 @@ use anyhow::{Context, Result};
 use subsurface_render::Renderer;
 use wgpu::CurrentSurfaceTexture;
 use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, OwnedDisplayHandle};
 use winit::window::{Window, WindowId};
@@ -49,6 +50,10 @@ pub struct App {
     presented: u32,
     frames_since_check: u32,
     failure: Option<anyhow::Error>,
+    /// `--soak`'s minimised window: the redraws skipped while winit would report 0x0. X11
+    /// cannot make a window 0x0 (Windows and Wayland report a minimised one so), so the soak
+    /// stands in for it at the one place the viewer reads the window's size.
+    minimised: Option<u32>,
     /// Loaded once: egui contexts are recreated with the device.
     fonts: Option<egui::FontDefinitions>,
 }
@@ -85,6 +90,7 @@ impl App {
             presented: 0,
             frames_since_check: 0,
             failure: None,
+            minimised: None,
             fonts,
         }
     }
@@ -103,6 +109,21 @@ impl App {
             );
         }
         Ok(())
+    }
+
+    /// The window's drawable size: 0x0 while the soak holds it minimised.
+    fn window_size(&self, window: &Window) -> PhysicalSize<u32> {
+        match self.minimised {
+            Some(_) => PhysicalSize::new(0, 0),
+            None => window.inner_size(),
+        }
+    }
+
+    /// Tells egui the window's size changed, as winit's `Resized` does.
+    fn resized(&mut self, window: &Window, size: PhysicalSize<u32>) {
+        if let Some((_, state)) = self.egui.as_mut() {
+            let _ = state.on_window_event(window, &WindowEvent::Resized(size));
+        }
     }
 
     fn scripted(&self) -> bool {
@@ -307,10 +328,13 @@ impl App {
         let Some(window) = self.window.clone() else {
             return;
         };
-        let size = window.inner_size();
+        let size = self.window_size(&window);
         // Minimised or zero-sized: there is nothing to draw and a surface cannot be
         // configured at 0 px; the next Resized event brings us back.
         if size.width == 0 || size.height == 0 {
+            if let Some(skipped) = self.minimised.as_mut() {
+                *skipped += 1;
+            }
             return;
         }
         if !self.ensure_gfx(event_loop, &window) {
@@ -372,8 +396,11 @@ impl App {
         for a in actions {
             self.run_action(a);
         }
-        if self.script.as_ref().is_some_and(|s| s.soak.is_some()) {
-            super::soak::Soak::edit(self.presented, &mut self.model, &window);
+        if self.script.as_ref().is_some_and(|s| s.soak.is_some())
+            && super::soak::Soak::edit(self.presented, &mut self.model, &window)
+        {
+            self.minimised = Some(0);
+            self.resized(&window, PhysicalSize::new(0, 0));
         }
         if let Err(e) = self.apply_edits() {
             let msg = format!("{e:#}");
@@ -558,11 +585,21 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        let Some(window) = &self.window else {
+        let Some(window) = self.window.clone() else {
             return;
         };
-        let size = window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        let size = self.window_size(&window);
+        if let Some(skipped) = self.minimised {
+            // The soak restores the window once a redraw has been skipped at 0x0.
+            if skipped > 0 {
+                self.minimised = None;
+                self.resized(&window, window.inner_size());
+                if let Some(soak) = self.script.as_mut().and_then(|s| s.soak.as_mut()) {
+                    soak.skipped_at_zero(skipped);
+                }
+            }
+            window.request_redraw();
+        } else if size.width == 0 || size.height == 0 {
             event_loop.set_control_flow(ControlFlow::Wait);
         } else if let Some(t) = self.retry_at.filter(|_| self.gfx.is_none()) {
             event_loop.set_control_flow(ControlFlow::WaitUntil(t));

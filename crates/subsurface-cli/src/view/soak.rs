@@ -1,7 +1,9 @@
 //! `view --frames N --soak` (hidden): the viewer's long-run check. Every frame edits what a
 //! user edits: the SSS and transmittance methods, the exposure, a light's place and strength,
-//! a light added and removed, and the window size (1x1 included: an X11 window cannot be
-//! 0x0, and a 0-sized window is skipped before anything is drawn). The edits repeat every
+//! a light added and removed, and the window size (1x1 included) and minimised. A minimised
+//! window is 0x0 on Windows and Wayland; X11 cannot make one, so the soak makes the viewer
+//! read 0x0 where it reads the window's size and sends egui the `Resized(0x0)` winit would,
+//! until one redraw has been skipped, then restores it. The edits repeat every
 //! [`CYCLE`] frames, so two cycles hold the same states; the process's resident memory, the
 //! GPU allocator's bytes and wgpu's live handles are taken every frame, and the largest of
 //! the last cycle is held against the largest of the cycle half way through the run (the
@@ -30,11 +32,13 @@ const SIZES: [(u32, u32); CYCLE as usize] = [
     (320, 240),
     (17, 301),
     (256, 256),
-    (1, 1),
+    MINIMISED,
     (320, 240),
     (400, 90),
     (320, 240),
 ];
+/// The entry of [`SIZES`] that minimises the window.
+const MINIMISED: (u32, u32) = (0, 0);
 /// Resident memory may grow this much (allocator noise), GPU bytes this much (the panel's
 /// vertex buffers follow its text, which changes every frame); live objects not at all.
 const RSS_GROWTH: f64 = 0.01;
@@ -68,6 +72,8 @@ pub struct Soak {
     last: Option<Sample>,
     /// The window sizes the frames were drawn at: proof that the resizes happened.
     sizes: std::collections::BTreeSet<(u32, u32)>,
+    /// Redraws skipped while minimised.
+    skipped: u32,
 }
 
 fn rss_kib() -> u64 {
@@ -110,11 +116,13 @@ impl Soak {
             reference: None,
             last: None,
             sizes: Default::default(),
+            skipped: 0,
         }
     }
 
-    /// The edits of frame `frame`, before it is drawn.
-    pub fn edit(frame: u32, model: &mut Model, window: &Window) {
+    /// The edits of frame `frame`, before it is drawn; true when the window is to be
+    /// minimised after it.
+    pub fn edit(frame: u32, model: &mut Model, window: &Window) -> bool {
         let k = (frame % CYCLE) as usize;
         let a = &mut model.state.a;
         a.sss.method = SssMethod::ALL[k % SssMethod::ALL.len()];
@@ -132,8 +140,18 @@ impl Soak {
             _ => {}
         }
         model.dirty.update = true;
+        if SIZES[k] == MINIMISED {
+            return true;
+        }
         let (w, h) = SIZES[k];
         let _ = window.request_inner_size(PhysicalSize::new(w, h));
+        false
+    }
+
+    /// The window was restored after `redraws` redraws skipped at 0x0.
+    pub fn skipped_at_zero(&mut self, redraws: u32) {
+        self.sizes.insert(MINIMISED);
+        self.skipped += redraws;
     }
 
     /// Measures after frame `frame` (1-based) was presented at `size`.
@@ -176,7 +194,7 @@ impl Soak {
         let line = format!(
             "soak: resident {} -> {} KiB ({:+.2} %), GPU allocated {} -> {} bytes, live wgpu \
              objects {} -> {} (largest of cycle {} vs of the last cycle of {CYCLE} frames; {} \
-             window sizes)",
+             window sizes; {} redraws skipped minimised)",
             r.rss_kib,
             l.rss_kib,
             100.0 * growth,
@@ -185,11 +203,16 @@ impl Soak {
             r.handles,
             l.handles,
             self.reference_cycle,
-            self.sizes.len()
+            self.sizes.len(),
+            self.skipped
         );
         anyhow::ensure!(
             growth <= RSS_GROWTH && gpu_growth <= GPU_GROWTH && l.handles <= r.handles,
             "{line}: grew"
+        );
+        anyhow::ensure!(
+            self.sizes.contains(&MINIMISED),
+            "{line}: the window was never minimised"
         );
         Ok(line)
     }

@@ -191,6 +191,7 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
     let mut mesh = Mesh {
         vertices: Vec::with_capacity(total_v),
         indices: Vec::with_capacity(total_i),
+        missing_uvs: None,
     };
     let mut all_have_tangents = true;
     let mut best_material: Option<(usize, gltf::Material)> = None;

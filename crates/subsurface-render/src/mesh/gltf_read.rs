@@ -251,6 +251,7 @@ pub(super) fn read_part(
             })
             .collect(),
         indices,
+        missing_uvs: None,
     };
     if normals.is_none() {
         mesh.compute_normals();
@@ -284,6 +285,7 @@ pub(super) fn read_part(
                 let mut one = Mesh {
                     vertices: vec![*v],
                     indices: vec![],
+                    missing_uvs: None,
                 };
                 one.transform(m);
                 *v = one.vertices[0];
@@ -315,5 +317,11 @@ pub(super) fn read_part(
         .collect();
     mesh.indices = kept;
     let dropped = before - mesh.triangle_count();
+    if uvs.is_empty() && !mesh.indices.is_empty() {
+        mesh.missing_uvs = Some(super::MissingUvs {
+            first_primitive: what.clone(),
+            triangles: mesh.triangle_count(),
+        });
+    }
     Ok((mesh, tangents.is_some(), dropped))
 }

@@ -36,6 +36,19 @@ pub struct Vertex {
 pub struct Mesh {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
+    /// Triangles whose glTF primitive had no `TEXCOORD_0` (their uvs are all the origin).
+    /// A mesh where only some primitives lack UVs still covers UV space, so the coverage
+    /// test alone would let texture-space diffusion render those primitives black.
+    pub missing_uvs: Option<MissingUvs>,
+}
+
+/// Where a mesh's UVs are missing: the first primitive without `TEXCOORD_0` and the
+/// number of triangles from all such primitives.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MissingUvs {
+    /// `mesh M primitive P` of the glTF file.
+    pub first_primitive: String,
+    pub triangles: usize,
 }
 
 impl Mesh {
@@ -63,6 +76,12 @@ impl Mesh {
         let base = self.vertices.len() as u32;
         self.vertices.extend_from_slice(&other.vertices);
         self.indices.extend(other.indices.iter().map(|i| i + base));
+        if let Some(o) = &other.missing_uvs {
+            match &mut self.missing_uvs {
+                Some(m) => m.triangles += o.triangles,
+                None => self.missing_uvs = Some(o.clone()),
+            }
+        }
     }
 
     /// Applies an affine transform: positions by `m`, normals by its inverse

@@ -61,19 +61,39 @@ pub struct TextureSpaceSettings {
 /// Every skin object must have a UV layout when the texture-space maps are on: without
 /// `TEXCOORD_0` every vertex sits at uv (0, 0), the irradiance pass rasterises nothing, and
 /// the object renders black with no other sign of why. Less than one texel of coverage is
-/// treated the same way. Checked before anything is allocated, by `Renderer::new` and on
+/// treated the same way, and so is a mesh where only some glTF primitives lack UVs (the
+/// others cover UV space, but those triangles would still render black). Checked before anything is allocated, by `Renderer::new` and on
 /// every `Renderer::update` (the viewer can switch the method on).
 pub fn check_uvs(scene: &crate::Scene, settings: &TextureSpaceSettings) -> Result<(), RenderError> {
     if !(settings.diffuse || settings.tsm) {
         return Ok(());
     }
     let one_texel = 1.0 / (f64::from(settings.size) * f64::from(settings.size));
-    let bad = scene.objects.iter().enumerate().find(|(_, o)| {
-        o.material.sss_strength > 0.0
-            && !o.mesh.indices.is_empty()
-            && !o.mesh.uv_area_at_least(one_texel)
+    let bad = scene.objects.iter().enumerate().find_map(|(i, o)| {
+        if o.material.sss_strength <= 0.0 || o.mesh.indices.is_empty() {
+            return None;
+        }
+        let of = o.mesh.triangle_count();
+        if let Some(m) = o.mesh.missing_uvs.as_ref().filter(|m| m.triangles < of) {
+            return Some((
+                i,
+                o,
+                format!(
+                    "{} of its {of} triangles have no texture coordinates ({} has no TEXCOORD_0)",
+                    m.triangles, m.first_primitive
+                ),
+            ));
+        }
+        let none = o.mesh.missing_uvs.is_some() || !o.mesh.uv_area_at_least(one_texel);
+        none.then(|| {
+            let why = "has no texture coordinates (no TEXCOORD_0, or its UVs cover less than \
+                       one texel)";
+            (i, o, why.to_string())
+        })
     });
-    let Some((i, o)) = bad else { return Ok(()) };
+    let Some((i, o, why)) = bad else {
+        return Ok(());
+    };
     let (field, source) = match scene.desc.objects.get(i).map(|d| &d.mesh) {
         Some(crate::scene::MeshDesc::Gltf { path }) => (
             format!("objects[{i}].mesh.gltf"),
@@ -95,9 +115,8 @@ pub fn check_uvs(scene: &crate::Scene, settings: &TextureSpaceSettings) -> Resul
     Err(RenderError::invalid(
         field,
         format!(
-            "{source} has no texture coordinates (no TEXCOORD_0, or its UVs cover less than \
-             one texel): {method} lays the skin out in UV space and would render it black; \
-             use {instead} or give the mesh UVs"
+            "{source} {why}: {method} lays the skin out in UV space and would render those \
+             triangles black; use {instead} or give the mesh UVs"
         ),
     ))
 }
