@@ -36,9 +36,28 @@ fn skin1() -> Dipole {
 }
 
 /// Looks materials up by name and fits measured ones once.
+///
+/// Fitting six Gaussians to a medium's R(r) costs tens of milliseconds; `Renderer::update`
+/// derives the optics afresh on every edit, and the viewer updates on every frame a slider
+/// moves (the soak spent 85 % of its time refitting the same skin1). So besides this
+/// cache's own map, the optics of the last [`FITTED_KEPT`] media are kept for the whole
+/// process: they are a pure function of the medium's exact coefficients.
 #[derive(Default)]
 pub struct MaterialCache {
     cache: HashMap<String, MaterialOptics>,
+}
+
+/// How many media's optics the process keeps (a scene has a handful; a sweep over media
+/// evicts the oldest).
+pub const FITTED_KEPT: usize = 64;
+
+/// The process-wide memo behind [`MaterialCache`], oldest first.
+fn fitted() -> std::sync::MutexGuard<'static, Vec<(String, MaterialOptics)>> {
+    static FITTED: std::sync::Mutex<Vec<(String, MaterialOptics)>> =
+        std::sync::Mutex::new(Vec::new());
+    // A panic while holding the lock cannot leave a half-written entry (entries are pushed
+    // whole), so a poisoned memo is still a good one.
+    FITTED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl MaterialCache {
@@ -47,6 +66,23 @@ impl MaterialCache {
         if let Some(m) = self.cache.get(&key) {
             return Ok(m.clone());
         }
+        if let Some((_, m)) = fitted().iter().find(|(k, _)| *k == key) {
+            self.cache.insert(key, m.clone());
+            return Ok(m.clone());
+        }
+        let optics = Self::derive(medium, field)?;
+        let mut memo = fitted();
+        if memo.len() >= FITTED_KEPT {
+            memo.remove(0);
+        }
+        memo.push((key.clone(), optics.clone()));
+        drop(memo);
+        self.cache.insert(key, optics.clone());
+        Ok(optics)
+    }
+
+    /// The optics of `medium`, derived (and for a measured medium, fitted) from scratch.
+    fn derive(medium: &Medium, field: &str) -> Result<MaterialOptics, RenderError> {
         let m = medium
             .material()
             .map_err(|e| RenderError::invalid(field, e.to_string()))?;
@@ -81,7 +117,6 @@ impl MaterialCache {
                 }
             }
         };
-        self.cache.insert(key, optics.clone());
         Ok(optics)
     }
 }
@@ -175,5 +210,53 @@ impl ProfileTable {
             kernels,
             object_rows,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subsurface_profile::Coefficients;
+
+    fn medium(k: usize) -> Medium {
+        Medium::Coefficients(Coefficients {
+            sigma_a: [0.03 + 0.001 * k as f64, 0.1, 0.2],
+            sigma_s: [7.0, 8.0, 9.0],
+            eta: 1.4,
+        })
+    }
+
+    /// A fresh cache (each `Renderer::update` makes one) finds a medium fitted before in the
+    /// process-wide memo, identical to a fit from scratch; the memo keeps the newest
+    /// [`FITTED_KEPT`] media.
+    #[test]
+    fn fits_are_kept_across_caches_and_the_oldest_evicted() {
+        let key = |k| medium(k).to_string();
+        let kept = |k| fitted().iter().any(|(x, _)| *x == key(k));
+        let first = MaterialCache::default().get(&medium(0), "m").unwrap();
+        assert!(kept(0));
+        let again = MaterialCache::default().get(&medium(0), "m").unwrap();
+        let scratch = MaterialCache::derive(&medium(0), "m").unwrap();
+        for o in [&again, &scratch] {
+            assert_eq!(o.profile, first.profile);
+            assert_eq!(o.diffuse_albedo, first.diffuse_albedo);
+        }
+        for k in 1..=FITTED_KEPT {
+            MaterialCache::default().get(&medium(k), "m").unwrap();
+        }
+        assert!(!kept(0), "the oldest medium was not evicted");
+        assert!(kept(FITTED_KEPT) && fitted().len() <= FITTED_KEPT);
+        // A bad medium is an error naming the field, and is not memoised.
+        let mut bad = medium(0);
+        if let Medium::Coefficients(c) = &mut bad {
+            c.sigma_a[1] = -1.0;
+        }
+        let e = MaterialCache::default().get(&bad, "objects[2].material.medium");
+        assert!(
+            e.unwrap_err()
+                .to_string()
+                .contains("objects[2].material.medium")
+        );
+        assert!(!fitted().iter().any(|(x, _)| *x == bad.to_string()));
     }
 }
