@@ -147,8 +147,21 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
     if (dot(out, out) < 0.5) {
         return vec3<f32>(0.0); // total internal reflection at the exit
     }
-    // A smooth boundary's lobe is a delta that pixels cannot resolve: keep it a few mrad wide.
-    let sigma = max(object.roughness * (eta - 1.0), 0.005);
+    // How far a facet tilt d turns the ray: at the entry the refracted ray turns by
+    // (1 - cos i / (eta cos t)) d, and the exit turns the inside spread by its angular
+    // magnification m = eta cos t' / cos o and adds (m - 1) d of its own. At normal incidence
+    // both are (eta - 1) d (outside); toward grazing, both grow without bound, which is what
+    // spreads the light through a finger's thin rim over the view. Beckmann slopes of RMS
+    // alpha / sqrt(2) per axis.
+    let cos_i = dot(n_back, l);
+    let cos_t = -dot(inside, n_back);
+    let cos_o = max(dot(normalize(out), n_front), 0.05);
+    let turn_in = abs(1.0 - cos_i / (eta * max(cos_t, 1e-3)));
+    let magnify = eta * cos_exit / cos_o;
+    let slope = object.roughness * 0.70710678;
+    // A smooth boundary's lobe is a delta that pixels cannot resolve: keep it a few mrad wide;
+    // past a radian the small-angle lobe no longer means anything.
+    let sigma = clamp(slope * length(vec2<f32>(magnify * turn_in, magnify - 1.0)), 0.005, 1.0);
     let theta2 = 2.0 * max(1.0 - dot(normalize(out), v), 0.0);
     let lobe = exp(-theta2 / (2.0 * sigma * sigma)) / (2.0 * PI * sigma * sigma);
     let f0 = (eta - 1.0) * (eta - 1.0) / ((eta + 1.0) * (eta + 1.0));
@@ -171,6 +184,14 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     let method = lights.transmittance;
     // 4 (translucent shadow maps) has its own path, tsm_transmittance.
     if (method == 0u || method == 4u || method > 5u) {
+        return out;
+    }
+    // Where the method's own back-irradiance factor is zero (`diffusion`: a point the light
+    // reaches directly on a surface facing it; the others: the wrap 0.3 - n.l), nothing
+    // crosses: skip the thickness lookup and its N x N shadow-map loads. Every directly lit
+    // pixel of a front-lit frame takes this exit.
+    let facing = dot(n_vertex, l);
+    if ((method == 5u && facing > 0.0 && lit >= 1.0) || (method != 5u && facing >= 0.3)) {
         return out;
     }
     let entry = light_entry(light, p, n_vertex);
