@@ -96,6 +96,8 @@ pub fn object_uniform(
         lut_range_mm,
         eta: optics.dipole.eta as f32,
         _pad: [0.0; 3],
+        scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
+        _pad2: 0.0,
     }
 }
 

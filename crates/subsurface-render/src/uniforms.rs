@@ -86,6 +86,9 @@ pub struct ObjectUniform {
     /// Relative index of refraction of the medium's boundary (the ballistic transmission lobe).
     pub eta: f32,
     pub _pad: [f32; 3],
+    /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
+    pub scattering: [f32; 3],
+    pub _pad2: f32,
 }
 
 #[repr(C)]

@@ -58,6 +58,7 @@ struct Object {
     extinction: vec3<f32>, // Beer-Lambert sigma_t, 1/mm
     lut_range_mm: f32,     // thickness range of the T(s) LUT
     eta: f32,              // relative index of refraction of the boundary
+    scattering: vec3<f32>, // reduced scattering sigma_s', 1/mm (isotropic phase)
 };
 
 @group(1) @binding(0) var<uniform> object: Object;
