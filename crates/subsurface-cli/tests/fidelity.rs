@@ -250,8 +250,10 @@ const DEFAULT: (&str, &str) = ("separable", "diffusion");
 
 /// Issue 13's target: every region mean within this of the path tracer...
 const REGION_TARGET: f64 = 0.20;
-/// ...except these, which docs/fidelity.md lists with their cause (lateral spread through
-/// round fingers; the diffusion source displaced by oblique incidence at the knife edge).
+/// ...except these, which docs/fidelity.md lists with what was measured of their cause (light
+/// that reaches the fingers' rims over about 2 mm of skin from the lit side, where the chord
+/// along the light is 9 mm; the diffusion source displaced by oblique incidence at the knife
+/// edge).
 const KNOWN_MISSES: [(&str, &str); 2] = [
     ("hand-backlit", "fingers"),
     ("knife-edge", "under the blade"),
