@@ -448,6 +448,31 @@ fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     assert_transmits(diffuse[32 * 64 + 32], want, "E cos 60 x T(6 mm)");
 }
 
+/// skin1's boundary (the Gaussian skin preset's measured medium): eta, Schlick's F0 and
+/// sigma_t per channel, 1/mm.
+const SKIN1_ETA: f32 = 1.3;
+const SKIN1_SIGMA_T: [f32; 3] = [0.772, 1.05, 1.49];
+
+fn skin1_f0() -> f32 {
+    ((SKIN1_ETA - 1.0) / (SKIN1_ETA + 1.0)).powi(2)
+}
+
+/// A 1 mm slab of skin lit from straight behind (1024-texel shadow map), turned `yaw_deg`
+/// about the vertical axis.
+fn thin_slab(yaw_deg: f32) -> Scene {
+    backlit(
+        &format!(
+            "{{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }}\n\
+             rotation_deg = [0.0, {yaw_deg}, 0.0]"
+        ),
+        1024,
+    )
+}
+
+fn specular(scene: &Scene, method: TransmittanceMethod) -> Vec<[f32; 4]> {
+    render(scene, 64, 64, method).read_specular().unwrap()
+}
+
 /// `diffusion`'s unscattered part: a 1 mm slab lit from straight behind passes
 /// exp(-sigma_t s) of the light on, through two Fresnel transmissions, spread by the rough
 /// boundary into a Gaussian lobe of sigma = alpha (eta - 1) around the light's direction
@@ -458,17 +483,12 @@ fn thin_slab_passes_unscattered_light_in_a_lobe_of_the_boundary_roughness() {
     if context().is_none() {
         return;
     }
-    let s = backlit(
-        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }",
-        1024,
-    );
-    let specular = |method| render(&s, 64, 64, method).read_specular().unwrap();
-    let spec = specular(TransmittanceMethod::Diffusion);
-    let (alpha, eta) = (0.3f32, 1.3f32);
-    let sigma = alpha * (eta - 1.0);
-    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
-    let peak =
-        [0.772f32, 1.05, 1.49].map(|st| (1.0 - f0).powi(2) * (-st).exp() / (2.0 * sigma * sigma));
+    let s = thin_slab(0.0);
+    let spec = specular(&s, TransmittanceMethod::Diffusion);
+    let alpha = 0.3f32;
+    let sigma = alpha * (SKIN1_ETA - 1.0);
+    let f0 = skin1_f0();
+    let peak = SKIN1_SIGMA_T.map(|st| (1.0 - f0).powi(2) * (-st).exp() / (2.0 * sigma * sigma));
     // Pixel (32, 32) looks 0.003 rad off the axis: the lobe there is the peak.
     assert_transmits(spec[32 * 64 + 32], peak, "unscattered peak");
     // Column 44 looks theta = atan(0.39 tan 10 deg) off the axis.
@@ -480,7 +500,7 @@ fn thin_slab_passes_unscattered_light_in_a_lobe_of_the_boundary_roughness() {
         peak.map(|p| p * falloff),
         "lobe at 0.069 rad",
     );
-    let paper = specular(TransmittanceMethod::Paper);
+    let paper = specular(&s, TransmittanceMethod::Paper);
     assert!(
         paper[32 * 64 + 32][0].abs() < 1e-6,
         "{:?}",
@@ -499,28 +519,22 @@ fn unscattered_lobe_widens_at_oblique_incidence() {
     if context().is_none() {
         return;
     }
-    let s = backlit(
-        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }\nrotation_deg = [0.0, 40.0, 0.0]",
-        1024,
-    );
-    let spec = render(&s, 64, 64, TransmittanceMethod::Diffusion)
-        .read_specular()
-        .unwrap();
-    let (alpha, eta) = (0.3f32, 1.3f32);
+    let spec = specular(&thin_slab(40.0), TransmittanceMethod::Diffusion);
+    let (alpha, eta) = (0.3f32, SKIN1_ETA);
     let i = 40f32.to_radians();
     let t = (i.sin() / eta).asin();
     let turn_in = 1.0 - i.cos() / (eta * t.cos());
     let m = eta * t.cos() / i.cos();
     let sigma = alpha / 2f32.sqrt() * (m * turn_in).hypot(m - 1.0);
     assert!((0.14..0.146).contains(&sigma), "{sigma}");
-    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let f0 = skin1_f0();
     let fresnel = f0 + (1.0 - f0) * (1.0 - i.cos()).powi(5);
     // The chord along the light, less what the 0.1 mm normal shrink moves the entry texel;
     // the tilted entry face changes its light distance by 0.08 mm across one shadow texel, so
     // the peak is held between those of the chord +-0.05 mm.
     let chord = 1.0 / i.cos() - SHRINK * 1000.0 * i.sin() * i.tan();
     let peak = |chord: f32| {
-        [0.772f32, 1.05, 1.49]
+        SKIN1_SIGMA_T
             .map(|st| (1.0 - fresnel).powi(2) * (-st * chord).exp() / (2.0 * sigma * sigma))
     };
     let (lo, hi) = (peak(chord + 0.05), peak(chord - 0.05));
@@ -560,23 +574,17 @@ fn thin_slab_scatters_light_once_toward_the_camera() {
     if context().is_none() {
         return;
     }
-    let mut s = backlit(
-        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.001 }",
-        1024,
-    );
+    let mut s = thin_slab(0.0);
     s.edit_materials(|m| m.roughness = 0.01);
-    let spec = render(&s, 64, 64, TransmittanceMethod::Diffusion)
-        .read_specular()
-        .unwrap();
-    let eta = 1.3f32;
-    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
-    // skin1's sigma_s' and sigma_t (the Gaussian skin preset's measured medium).
-    let want = [(0.74f32, 0.772f32), (0.88, 1.05), (1.01, 1.49)]
-        .map(|(ss, st)| ss * 1.0 * (-st).exp() / 4.0 * (1.0 - f0).powi(2));
+    let spec = specular(&s, TransmittanceMethod::Diffusion);
+    let f0 = skin1_f0();
+    // skin1's sigma_s' (the Gaussian skin preset's measured medium), 1/mm.
+    let sigma_s = [0.74f32, 0.88, 1.01];
+    let want: [f32; 3] = std::array::from_fn(|c| {
+        sigma_s[c] * 1.0 * (-SKIN1_SIGMA_T[c]).exp() / 4.0 * (1.0 - f0).powi(2)
+    });
     assert_transmits(spec[32 * 64 + 40], want, "sigma_s' s exp(-sigma_t s) / 4");
     // `paper` has no single scattering.
-    let paper = render(&s, 64, 64, TransmittanceMethod::Paper)
-        .read_specular()
-        .unwrap();
+    let paper = specular(&s, TransmittanceMethod::Paper);
     assert!(paper[32 * 64 + 40][0].abs() < 1e-6);
 }

@@ -117,8 +117,13 @@ fn beckmann(ndoth: f32, m: f32) -> f32 {
 // the measured media's 1.3 (d'Eon's 0.028 is skin at 1.4), so the specular is the reflection of
 // the same boundary the path tracer renders.
 fn fresnel(h: vec3<f32>, v: vec3<f32>) -> f32 {
-    let base = 1.0 - max(dot(v, h), 0.0);
-    let e = pow(base, 5.0);
+    return boundary_fresnel(dot(v, h));
+}
+
+// The same boundary's Schlick reflectance at an angle of cosine `cos_theta`; transmittance.wgsl
+// takes 1 minus it for light crossing the boundary.
+fn boundary_fresnel(cos_theta: f32) -> f32 {
+    let e = pow(1.0 - max(cos_theta, 0.0), 5.0);
     let r = (object.eta - 1.0) / (object.eta + 1.0);
     return e + r * r * (1.0 - e);
 }

@@ -32,6 +32,12 @@ fn shadow_distance(light: Light, sc: ShadowCoord, taps: i32) -> vec2<f32> {
 
 const PI: f32 = 3.14159265;
 
+// The texel of `light`'s map that holds the projected point.
+fn shadow_texel(light: Light, sc: ShadowCoord) -> vec2<i32> {
+    let size = light.shadow_uv_scale / light.atlas_texel;
+    return clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
+}
+
 // Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the LUT's second row).
 const DIFFUSION_RANGE_MM: f32 = 32.0;
 
@@ -139,8 +145,9 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
 fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
     let inside = refract(-l, n_back, 1.0 / eta);
+    let cos_i = dot(n_back, l);
     let cos_exit = dot(inside, n_front);
-    if (dot(n_back, l) <= 0.0 || cos_exit <= 0.0) {
+    if (cos_i <= 0.0 || cos_exit <= 0.0) {
         return vec3<f32>(0.0);
     }
     let out = refract(inside, -n_front, eta);
@@ -153,7 +160,6 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
     // both are (eta - 1) d (outside); toward grazing, both grow without bound, which is what
     // spreads the light through a finger's thin rim over the view. Beckmann slopes of RMS
     // alpha / sqrt(2) per axis.
-    let cos_i = dot(n_back, l);
     let cos_t = -dot(inside, n_back);
     let cos_o = max(dot(normalize(out), n_front), 0.05);
     let turn_in = abs(1.0 - cos_i / (eta * max(cos_t, 1e-3)));
@@ -164,9 +170,8 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
     let sigma = clamp(slope * length(vec2<f32>(magnify * turn_in, magnify - 1.0)), 0.005, 1.0);
     let theta2 = 2.0 * max(1.0 - dot(normalize(out), v), 0.0);
     let lobe = exp(-theta2 / (2.0 * sigma * sigma)) / (2.0 * PI * sigma * sigma);
-    let f0 = (eta - 1.0) * (eta - 1.0) / ((eta + 1.0) * (eta + 1.0));
-    let t_in = 1.0 - (f0 + (1.0 - f0) * pow(1.0 - dot(n_back, l), 5.0));
-    let t_out = 1.0 - (f0 + (1.0 - f0) * pow(1.0 - max(dot(out, n_front), 0.0), 5.0));
+    let t_in = 1.0 - boundary_fresnel(cos_i);
+    let t_out = 1.0 - boundary_fresnel(dot(out, n_front));
     return PI * t_in * t_out * exp(-object.extinction * s_mm) * lobe;
 }
 
@@ -194,9 +199,6 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
         return vec3<f32>(0.0);
     }
     let units_per_mm = object.world_per_mm * object.translucency;
-    let size = light.shadow_uv_scale / light.atlas_texel;
-    let max_texel = vec2<i32>(i32(size) - 1);
-    let f0 = (eta - 1.0) * (eta - 1.0) / ((eta + 1.0) * (eta + 1.0));
     let step_mm = s_mm / f32(SCATTER_STEPS);
     var sum = vec3<f32>(0.0);
     for (var k = 0; k < SCATTER_STEPS; k++) {
@@ -206,18 +208,16 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
         if (!sc.inside) {
             break;
         }
-        let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), max_texel);
-        let d = textureLoad(shadow_atlas, texel, sc.layer, 0).rg;
+        let d = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
         let s_i = (light_distance(light.kind, light.position, light.direction, q) - d.x) / units_per_mm;
         // Beyond the far side (or nothing seen by the light there): the ray has left.
         if (d.x > 1e30 || s_i <= 0.0) {
             break;
         }
         let cos_e = select(1.0, max(dot(decode_normal(d.y), l), 0.0), d.y >= 0.0);
-        let t_in = 1.0 - (f0 + (1.0 - f0) * pow(1.0 - cos_e, 5.0));
-        sum += t_in * exp(-object.extinction * (t + s_i));
+        sum += (1.0 - boundary_fresnel(cos_e)) * exp(-object.extinction * (t + s_i));
     }
-    let t_out = 1.0 - (f0 + (1.0 - f0) * pow(1.0 - cos_v, 5.0));
+    let t_out = 1.0 - boundary_fresnel(cos_v);
     return object.scattering * 0.25 * sum * step_mm * t_out;
 }
 
@@ -279,7 +279,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
             // switch the transmitted light off.
             let n_back = entry.normal;
             if (dot(n_back, n_back) > 0.5) {
-                let unlit = select(1.0 - lit, 1.0, dot(n_vertex, l) <= 0.0);
+                let unlit = select(1.0 - lit, 1.0, facing <= 0.0);
                 out.diffuse = diffusion_transmittance(s_mm) * max(dot(n_back, l), 0.0) * unlit;
                 let ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
                 // Single scattering only where the surface faces away from the light: where it
@@ -287,7 +287,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 // onto the unblurred specular target (and a lit point's own single scattering
                 // is a reflection term this renderer does not model).
                 var single = vec3<f32>(0.0);
-                if (dot(n_vertex, l) <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
+                if (facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
                     single = single_scattering(light, p, n_vertex, l, v, s_mm);
                 }
                 out.ballistic = (ballistic + single) * unlit;
@@ -323,9 +323,7 @@ fn tsm_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, lit: f32) 
     }
     let s_units = abs(light_distance(light.kind, light.position, light.direction, shrunk) - d_in);
     let s_mm = s_units / (object.world_per_mm * object.translucency);
-    let size = light.shadow_uv_scale / light.atlas_texel;
-    let texel = clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
-    let uv_in = textureLoad(tsm_atlas, texel, sc.layer, 0).xy;
+    let uv_in = textureLoad(tsm_atlas, shadow_texel(light, sc), sc.layer, 0).xy;
     if (uv_in.x < 0.0) {
         return vec3<f32>(0.0);
     }
