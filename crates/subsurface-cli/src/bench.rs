@@ -9,7 +9,8 @@ use plotters::prelude::*;
 use serde::Serialize;
 use subsurface_profile::Medium;
 use subsurface_render::{
-    GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod,
+    GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssFetch, SssMethod,
+    TransmittanceMethod,
 };
 
 use crate::output::{PendingFile, print_summary};
@@ -61,6 +62,22 @@ pub struct BenchArgs {
     /// per material shows beside one profile for all.
     #[arg(long, default_value = "1", value_delimiter = ',', value_name = "N,..")]
     pub profiles: Vec<u32>,
+    /// How the screen-space passes fetch a tap's texels, comma-separated: packed (one
+    /// Rgba32Uint texel per texel, after a pack step), workgroup (packed, and separable's
+    /// passes as compute shaders reading workgroup memory) and/or direct (colour, depth and SSS
+    /// textures per texel); the same image, so `packed,workgroup,direct` compares their cost.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "packed",
+        value_name = "FETCH,.."
+    )]
+    pub fetch: Vec<SssFetch>,
+    /// Numbers of the scene's lights to keep (its first N), comma-separated, e.g. 1,5 on the
+    /// head: the table then gives the lighting and shadow passes' cost per light (the slope
+    /// between the smallest and the largest N) [default: all of the scene's lights].
+    #[arg(long, value_delimiter = ',', value_name = "N,..")]
+    pub lights: Vec<u32>,
     /// Separable kernel taps.
     #[arg(long, default_value_t = 17, value_name = "N")]
     pub samples: u32,
@@ -108,9 +125,13 @@ struct Run {
     characters: u32,
     /// Rows of the screen-space profile table (distinct profiles on screen).
     profiles: u32,
+    /// Lights kept of the scene's (`--lights`).
+    lights: u32,
     width: u32,
     height: u32,
     sss: &'static str,
+    /// How the screen-space passes fetched their texels (`packed`, `direct`).
+    fetch: &'static str,
     transmittance: String,
     /// Sum of the median per-pass GPU times (copy baseline excluded).
     frame_ms: f64,
@@ -255,10 +276,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "--profiles: each must be in 1..=256 (got {p})"
         );
     }
+    let all_lights = base.desc.lights.len() as u32;
+    let light_counts = if args.lights.is_empty() {
+        vec![all_lights]
+    } else {
+        args.lights.clone()
+    };
+    if let Some(n) = light_counts.iter().find(|n| **n > all_lights) {
+        anyhow::bail!("--lights: {n} is more than the scene's {all_lights} lights");
+    }
     let configs = sizes.len()
+        * light_counts.len()
         * args.characters.len()
         * args.profiles.len()
         * args.sss.len()
+        * args.fetch.len()
         * args.transmittance.len();
     let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
         .with_style(
@@ -266,16 +298,28 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 .expect("static template"),
         );
     let mut runs = Vec::new();
-    for (&n, &profiles) in args
-        .characters
-        .iter()
-        .flat_map(|n| args.profiles.iter().map(move |p| (n, p)))
-    {
+    let counts = args.characters.iter().flat_map(|n| {
+        let lights = &light_counts;
+        args.profiles
+            .iter()
+            .flat_map(move |p| lights.iter().map(move |l| (*n, *p, *l)))
+    });
+    for (n, profiles, lights) in counts {
         let mut scene = replicate(&base, n);
+        scene.desc.lights.truncate(lights as usize);
         distinct_profiles(&mut scene, profiles);
         for &(w, h) in &sizes {
             ctx.check_size("--sizes ", w, h)?;
-            for &method in &args.sss {
+            let methods = args.sss.iter().flat_map(|m| {
+                // The fetch only matters to the screen-space methods.
+                let fetches = if m.is_screen_space() {
+                    args.fetch.clone()
+                } else {
+                    vec![args.fetch[0]]
+                };
+                fetches.into_iter().map(move |f| (*m, f))
+            });
+            for (method, fetch) in methods {
                 for &tm in &args.transmittance {
                     bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
                     let mut opts = RenderOptions::from_scene(&scene);
@@ -284,6 +328,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     s.sss.method = method;
                     s.sss.samples = args.samples;
                     s.sss.jitter = args.jitter;
+                    s.sss.fetch = fetch;
                     s.transmittance.method = tm;
                     opts.baseline_copy = true;
                     let sss_settings = opts.settings.sss.clone();
@@ -299,7 +344,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     }
                     let mut run = summarise(samples, n, w, h, method, tm);
                     run.profiles = renderer.profile_table().kernels.len() as u32;
+                    run.lights = lights;
                     (run.samples, run.jitter) = (args.samples, args.jitter);
+                    run.fetch = fetch.name();
                     run.traffic = traffic_of(&run, &sss_settings, args.bandwidth);
                     if let (Some(fixed), SssMethod::Separable) = (args.flip_vs, method) {
                         let ours = renderer.render()?.image;
@@ -385,9 +432,11 @@ fn summarise(
     Run {
         characters: n,
         profiles: 1,
+        lights: 0,
         width: w,
         height: h,
         sss: method.name(),
+        fetch: "",
         transmittance: tm.name().to_string(),
         frame_ms,
         passes,
@@ -407,11 +456,13 @@ fn table(report: &Report) -> String {
         report.adapter, report.frames, report.warmup
     );
     out += &format!(
-        "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}\n",
+        "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}\n",
         "chars",
         "profiles",
+        "lights",
         "size",
         "sss",
+        "fetch",
         "transm.",
         "frame ms",
         "shadow",
@@ -423,11 +474,13 @@ fn table(report: &Report) -> String {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
         let sss = sss_ms(&r.passes);
         out += &format!(
-            "{:>5} {:>8} {:>10} {:>10} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
+            "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
             r.characters,
             r.profiles,
+            r.lights,
             format!("{}x{}", r.width, r.height),
             r.sss,
+            r.fetch,
             r.transmittance,
             r.frame_ms,
             p("shadow"),
@@ -450,7 +503,53 @@ fn table(report: &Report) -> String {
             );
         }
     }
-    out + &traffic_table(report)
+    out + &per_light(report) + &traffic_table(report)
+}
+
+/// With several `--lights` counts: the lighting and shadow passes' cost per light, the slope
+/// between the fewest and the most lights of runs that differ in nothing else.
+fn per_light(report: &Report) -> String {
+    let mut out = String::new();
+    let same = |a: &Run, b: &Run| {
+        (a.characters, a.profiles, a.width, a.height, a.sss, a.fetch)
+            == (b.characters, b.profiles, b.width, b.height, b.sss, b.fetch)
+            && a.transmittance == b.transmittance
+    };
+    let pass = |r: &Run, n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
+    for (i, r) in report.runs.iter().enumerate() {
+        // Each group once, from its first run.
+        if report.runs[..i].iter().any(|o| same(o, r)) {
+            continue;
+        }
+        let group: Vec<&Run> = report.runs.iter().filter(|o| same(o, r)).collect();
+        let fewest = group
+            .iter()
+            .min_by_key(|r| r.lights)
+            .expect("r is in its group");
+        let most = group
+            .iter()
+            .max_by_key(|r| r.lights)
+            .expect("r is in its group");
+        if fewest.lights == most.lights {
+            continue;
+        }
+        if out.is_empty() {
+            out += "\ncost per light (slope between the fewest and the most lights)\n";
+        }
+        let k = f64::from(most.lights - fewest.lights);
+        let slope = |n: &str| (pass(most, n) - pass(fewest, n)) / k;
+        out += &format!(
+            "{:>10} {:>10} {:>10} lights {}..{}: lighting {:.3} ms, shadow {:.3} ms per light\n",
+            format!("{}x{}", r.width, r.height),
+            r.sss,
+            r.transmittance,
+            fewest.lights,
+            most.lights,
+            slope("lighting"),
+            slope("shadow"),
+        );
+    }
+    out
 }
 
 const PLOT_SIZE: (u32, u32) = (900, 560);

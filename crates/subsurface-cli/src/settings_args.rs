@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use glam::{Mat4, Vec3};
-use subsurface_render::{Scene, SssMethod, TransmittanceMethod};
+use subsurface_render::{Scene, SssFetch, SssMethod, TransmittanceMethod};
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct SettingsArgs {
@@ -37,6 +37,13 @@ pub struct SettingsArgs {
     /// [default: render.sss.jitter, false].
     #[arg(long)]
     pub jitter: bool,
+    /// Screen space: how a tap fetches its texels, packed (a pack step first, then one
+    /// Rgba32Uint texel per texel), workgroup (packed, with separable's passes as compute
+    /// shaders that read each line once into workgroup memory) or direct (colour, depth and
+    /// SSS textures per texel); the same image at a different cost [default: render.sss.fetch,
+    /// packed].
+    #[arg(long, value_name = "FETCH")]
+    pub sss_fetch: Option<SssFetch>,
     /// Let the blur cross depth edges (render.sss.follow_surface = false).
     #[arg(long)]
     pub no_follow_surface: bool,
@@ -106,6 +113,7 @@ impl SettingsArgs {
         set!(self.exposure_ev, r.exposure_ev);
         set!(self.sss, r.sss.method);
         set!(self.samples, r.sss.samples);
+        set!(self.sss_fetch, r.sss.fetch);
         set!(self.gaussians, r.sss.gaussians);
         set!(self.texture_size, r.sss.texture_size);
         set!(self.transmittance, r.transmittance.method);
@@ -262,6 +270,7 @@ mod tests {
         let args = SettingsArgs {
             samples: Some(9),
             jitter: true,
+            sss_fetch: Some(SssFetch::Direct),
             sss: Some(SssMethod::Hable13),
             sss_width: Some(2.0),
             kernel_strength: Some([1.0, 0.5, 0.25]),
@@ -270,6 +279,7 @@ mod tests {
         args.apply(&mut scene).unwrap();
         assert_eq!(scene.desc.render.sss.samples, 9);
         assert!(scene.desc.render.sss.jitter);
+        assert_eq!(scene.desc.render.sss.fetch, SssFetch::Direct);
         assert_eq!(scene.desc.render.sss.method, SssMethod::Hable13);
         for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {
             assert_eq!(o.material.sss_width, 2.0);

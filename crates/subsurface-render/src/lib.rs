@@ -24,7 +24,7 @@ pub use passes::tonemap::DebugView;
 pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
-    RenderSettings, SssMethod, SssSettings, TransmittanceMethod, TransmittanceSettings,
+    RenderSettings, SssFetch, SssMethod, SssSettings, TransmittanceMethod, TransmittanceSettings,
 };
 pub use timing::PassTiming;
 

@@ -227,7 +227,7 @@ impl Renderer {
             &maps_layout,
             &camera,
             &lights.uniform,
-            &shadow.atlas_view,
+            shadow.maps(),
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
@@ -381,7 +381,7 @@ impl Renderer {
                 &self.maps_layout,
                 &camera,
                 &lights.uniform,
-                &self.shadow.atlas_view,
+                self.shadow.maps(),
                 self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
             );
         }

@@ -11,7 +11,8 @@ use sss_util::*;
 use subsurface_profile::oracle::{self, ScreenInput};
 use subsurface_render::passes::sss::SssPass;
 use subsurface_render::{
-    DebugView, GpuContext, RenderOptions, RenderSettings, Renderer, SssMethod, SssSettings,
+    DebugView, GpuContext, RenderOptions, RenderSettings, Renderer, SssFetch, SssMethod,
+    SssSettings,
 };
 
 // Stated tolerances: max absolute difference for colours in 0.05..0.35 stored as Rgba16Float
@@ -20,8 +21,8 @@ const TOL_SEPARABLE: f32 = 1e-3;
 const TOL_GAUSSIAN6: f32 = 1e-3;
 const TOL_HABLE13: f32 = 1e-3;
 
-/// The pass run with `config` on `input` on the GPU is within `tol` of the oracle's `cpu`
-/// everywhere, and blurs.
+/// The pass run with `config` on `input` on the GPU, with each way of fetching texels, is
+/// within `tol` of the oracle's `cpu` everywhere, and blurs.
 fn assert_blurs_as_oracle(
     ctx: &GpuContext,
     input: &ScreenInput,
@@ -30,14 +31,20 @@ fn assert_blurs_as_oracle(
     tol: f32,
     name: &str,
 ) {
-    let gpu = run_gpu(ctx, input, config);
-    let d = max_abs_diff(&gpu, cpu);
-    eprintln!("{name}: max |GPU - oracle| = {d:.2e}");
-    assert!(d < tol, "{name}: {d}");
-    assert!(
-        max_abs_diff(&gpu, &input.color) > 0.01,
-        "{name} did not blur"
-    );
+    for fetch in SssFetch::ALL {
+        let config = SssSettings {
+            fetch,
+            ..config.clone()
+        };
+        let gpu = run_gpu(ctx, input, &config);
+        let d = max_abs_diff(&gpu, cpu);
+        eprintln!("{name}, {fetch} fetch: max |GPU - oracle| = {d:.2e}");
+        assert!(d < tol, "{name}, {fetch} fetch: {d}");
+        assert!(
+            max_abs_diff(&gpu, &input.color) > 0.01,
+            "{name}, {fetch} fetch did not blur"
+        );
+    }
 }
 
 #[test]
@@ -83,10 +90,73 @@ fn jittered_separable_matches_oracle() {
     };
     let table = three_materials(7);
     let cpu = oracle::separable_jittered(&input, &table, &params(&config)).unwrap();
-    let gpu = run_gpu_with(&ctx, &input, &config, &table);
-    let d = max_abs_diff(&gpu, &cpu);
-    eprintln!("jittered separable, three profiles: max |GPU - oracle| = {d:.2e}");
-    assert!(d < TOL_SEPARABLE, "{d}");
+    for fetch in SssFetch::ALL {
+        let config = SssSettings {
+            fetch,
+            ..config.clone()
+        };
+        let gpu = run_gpu_with(&ctx, &input, &config, &table);
+        let d = max_abs_diff(&gpu, &cpu);
+        eprintln!(
+            "jittered separable, three profiles, {fetch} fetch: max |GPU - oracle| = {d:.2e}"
+        );
+        assert!(d < TOL_SEPARABLE, "{fetch} fetch: {d}");
+    }
+}
+
+/// The workgroup fetch on a line longer than a workgroup's stretch, with a kernel wider than
+/// its apron: taps past the apron read the texture, and the result is still the oracle's; as
+/// it is where the vertical pass cannot write the diffuse texture (a fragment pass then).
+#[test]
+fn workgroup_fetch_past_the_apron_and_without_storage_matches_oracle() {
+    let Some(ctx) = context() else { return };
+    let (w, h) = (384u32, 24u32);
+    let mut input = ScreenInput::uniform(w, h, [0.0; 3], 0.5, 1.0, 0.1);
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x as f32, y as f32);
+            input.color[(y * w + x) as usize] = [
+                0.2 + 0.1 * (fx * 0.11).sin(),
+                0.2 + 0.1 * (fy * 0.3).cos(),
+                0.15 + 0.1 * ((fx + fy) * 0.07).sin(),
+            ];
+        }
+    }
+    to_f16_exact(&mut input);
+    let table = skin(17);
+    let px_per_mm = input.world_per_mm[0] * FOCAL / input.depth[0];
+    let widest = table[0]
+        .separable
+        .iter()
+        .map(|k| k[3].abs())
+        .fold(0.0, f32::max);
+    assert!(
+        widest * px_per_mm > 64.0,
+        "the test needs taps past the 64-texel apron ({} px)",
+        widest * px_per_mm
+    );
+    for jitter in [false, true] {
+        let config = SssSettings {
+            fetch: SssFetch::Workgroup,
+            jitter,
+            ..Default::default()
+        };
+        let cpu = if jitter {
+            oracle::separable_jittered(&input, &table, &params(&config))
+        } else {
+            oracle::separable(&input, &table, &params(&config))
+        }
+        .unwrap();
+        for storage in [true, false] {
+            let gpu = run_gpu_on(&ctx, &input, &config, &table, storage);
+            let d = max_abs_diff(&gpu, &cpu);
+            eprintln!(
+                "workgroup, jitter {jitter}, storage {storage}: max |GPU - oracle| = {d:.2e}"
+            );
+            assert!(d < TOL_SEPARABLE, "jitter {jitter}, storage {storage}: {d}");
+            assert!(max_abs_diff(&gpu, &input.color) > 0.01, "did not blur");
+        }
+    }
 }
 
 #[test]
@@ -258,23 +328,23 @@ const SILHOUETTE_BOUND: f32 = 0.03;
 fn no_bleeding_between_skin_and_background() {
     let Some(ctx) = context() else { return };
     let input = skin_against_sky();
-    for method in METHODS {
-        let out = run_gpu(&ctx, &input, &settings(method));
+    for (method, fetch, config) in methods_and_fetches() {
+        let out = run_gpu(&ctx, &input, &config);
         let mut worst = 0.0f32;
         for (i, (o, c)) in out.iter().zip(&input.color).enumerate() {
             if input.strength[i] == 0.0 {
                 // Background pixels: bit-identical (no glow or halo around the silhouette).
-                assert_eq!(o, c, "{method:?}: background pixel {i} changed");
+                assert_eq!(o, c, "{method:?}, {fetch}: background pixel {i} changed");
             } else {
                 for ch in 0..3 {
                     worst = worst.max((o[ch] - c[ch]).abs() / c[ch]);
                 }
             }
         }
-        eprintln!("{method:?}: worst relative change of skin next to the sky {worst:.4}");
+        eprintln!("{method:?}, {fetch}: worst relative change of skin next to the sky {worst:.4}");
         assert!(
             worst < SILHOUETTE_BOUND,
-            "{method:?}: skin tinted by the sky by {worst}"
+            "{method:?}, {fetch}: skin tinted by the sky by {worst}"
         );
     }
 }

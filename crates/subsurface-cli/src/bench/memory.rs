@@ -73,9 +73,10 @@ pub(super) fn traffic_table(report: &Report) -> String {
          once; per tap: every texel each tap filters, no cache)\n",
     );
     out += &format!(
-        "{:>10} {:>10} {:>7} {:>6} {:>9} {:>9} {:>11} {:>9} {:>9} {:>8}\n",
+        "{:>10} {:>10} {:>9} {:>7} {:>6} {:>9} {:>9} {:>11} {:>9} {:>9} {:>8}\n",
         "size",
         "sss",
+        "fetch",
         "jitter",
         "pass",
         "read MB",
@@ -89,9 +90,10 @@ pub(super) fn traffic_table(report: &Report) -> String {
     for r in &report.runs {
         for t in &r.traffic {
             out += &format!(
-                "{:>10} {:>10} {:>7} {:>6} {:>9.1} {:>9.1} {:>11.1} {:>9.3} {:>9} {:>8}\n",
+                "{:>10} {:>10} {:>9} {:>7} {:>6} {:>9.1} {:>9.1} {:>11.1} {:>9.3} {:>9} {:>8}\n",
                 format!("{}x{}", r.width, r.height),
                 r.sss,
+                r.fetch,
                 if r.jitter { "yes" } else { "no" },
                 t.model.name,
                 mb(t.model.read_bytes),

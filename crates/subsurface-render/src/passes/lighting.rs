@@ -51,7 +51,16 @@ impl LightingTargets {
         Self {
             width,
             height,
-            diffuse: target("diffuse", RADIANCE_FORMAT),
+            // Storage too: the workgroup fetch's vertical SSS pass writes it from a compute
+            // shader.
+            diffuse: util::render_target_with(
+                device,
+                "diffuse",
+                width,
+                height,
+                RADIANCE_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING,
+            ),
             specular: target("specular", RADIANCE_FORMAT),
             depth: target("linear depth", DEPTH_FORMAT),
             sss: target("sss strength", SSS_FORMAT),
@@ -60,9 +69,10 @@ impl LightingTargets {
     }
 }
 
-/// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas` in
-/// lighting.wgsl). Equal layouts are interchangeable, so other pipelines built on the lighting
-/// shader (the texture-space irradiance) may bind [`LightingPass::frame_bind_group`].
+/// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
+/// `shadow_depth` and `shadow_compare` in lighting.wgsl). Equal layouts are interchangeable,
+/// so other pipelines built on the lighting shader (the texture-space irradiance) may bind
+/// [`LightingPass::frame_bind_group`].
 pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX_FRAGMENT);
     // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
@@ -74,13 +84,48 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::TextureViewDimension::D2Array,
         )
     };
+    // The shadow maps' z-buffer, read through a comparison sampler: each fetch tests and
+    // bilinearly filters 2x2 texels in the texture unit (hardware PCF).
+    let depth = wgpu::BindGroupLayoutEntry {
+        binding: 4,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lighting frame"),
-        entries: &[uniform(0), uniform(1), atlas(2), atlas(3)],
+        entries: &[
+            uniform(0),
+            uniform(1),
+            atlas(2),
+            atlas(3),
+            depth,
+            util::sampler_entry(
+                5,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::SamplerBindingType::Comparison,
+            ),
+        ],
     })
 }
 
+/// The shadow maps the lighting pass reads ([`crate::passes::shadow::ShadowPass::maps`]).
+#[derive(Clone, Copy)]
+pub struct ShadowMaps<'a> {
+    /// Linear light distance and entry normal per texel (`Rg32Float` array): thickness.
+    pub atlas: &'a wgpu::TextureView,
+    /// The same layers' z-buffer (`Depth32Float` array): percentage-closer filtering through
+    /// a comparison sampler.
+    pub depth: &'a wgpu::TextureView,
+}
+
 pub struct LightingPass {
+    /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
+    prepass: wgpu::RenderPipeline,
     pipeline: wgpu::RenderPipeline,
     frame_bind_group: wgpu::BindGroup,
     /// Group 2 for objects without texture-space maps.
@@ -96,7 +141,7 @@ impl LightingPass {
         object_layout: &wgpu::BindGroupLayout,
         camera: &CameraUniform,
         lights: &LightsUniform,
-        shadow_atlas: &wgpu::TextureView,
+        shadow: ShadowMaps<'_>,
     ) -> Self {
         let maps_layout = maps::maps_layout(&ctx.device);
         let tsm = maps::dummy_tsm_view(&ctx.device);
@@ -106,23 +151,31 @@ impl LightingPass {
             &maps_layout,
             camera,
             lights,
-            shadow_atlas,
+            shadow,
             &tsm,
         )
     }
 
     /// `maps_layout` is [`maps::maps_layout`] (group 2, per object); `tsm_atlas` the
-    /// translucent shadow maps (`Rg32Float` array, same layers as `shadow_atlas`).
+    /// translucent shadow maps (`Rg32Float` array, same layers as the shadow maps).
     pub fn with_maps(
         ctx: &GpuContext,
         object_layout: &wgpu::BindGroupLayout,
         maps_layout: &wgpu::BindGroupLayout,
         camera: &CameraUniform,
         lights: &LightsUniform,
-        shadow_atlas: &wgpu::TextureView,
+        shadow: ShadowMaps<'_>,
         tsm_atlas: &wgpu::TextureView,
     ) -> Self {
         let device = &ctx.device;
+        let shadow_compare = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow compare"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            // Lit where the receiver's biased depth is at most the occluder's.
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -149,11 +202,19 @@ impl LightingPass {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(shadow_atlas),
+                    resource: wgpu::BindingResource::TextureView(shadow.atlas),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: wgpu::BindingResource::TextureView(tsm_atlas),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(shadow.depth),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&shadow_compare),
                 },
             ],
         });
@@ -172,11 +233,16 @@ impl LightingPass {
             // Not culled: glTF skin meshes are often open (wrists, necks) and the shader flips
             // the normal of back faces.
             cull_mode: None,
-            depth_test: true,
+            depth: util::DepthTest::Prepassed,
         }
         .create(device);
+        // Meshes drawn without culling in any order would shade every surface a pixel covers
+        // that lands before the nearest one (the back of a head, the far side of a hand): a
+        // depth-only pass first leaves the lighting shader one fragment per pixel.
+        let prepass = util::depth_prepass_pipeline(device, &layout, &module, "vs_main");
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         Self {
+            prepass,
             pipeline,
             default_maps,
             frame_bind_group,
@@ -235,6 +301,31 @@ impl LightingPass {
             b: background[2] as f64,
             a: 1.0,
         };
+        let timer = TimedPass::begin(profiler, "depth prepass", encoder);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth prepass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.zbuffer,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.prepass);
+            pass.set_bind_group(0, &self.frame_bind_group, &[]);
+            for (i, o) in objects.iter().enumerate() {
+                pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
+                o.draw(&mut pass);
+            }
+        }
+        timer.end(profiler, encoder);
         let timer = TimedPass::begin(profiler, "lighting", encoder);
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -253,7 +344,14 @@ impl LightingPass {
                     ),
                     attach(&sss, wgpu::Color::TRANSPARENT),
                 ],
-                depth_stencil_attachment: util::depth_attachment(&targets.zbuffer),
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.zbuffer,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,

@@ -7,9 +7,14 @@
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> lights: Lights;
 @group(0) @binding(2) var shadow_atlas: texture_2d_array<f32>;
+// The same maps' z-buffer, for percentage-closer filtering in the texture unit.
+@group(0) @binding(4) var shadow_depth: texture_depth_2d_array;
+@group(0) @binding(5) var shadow_compare: sampler_comparison;
 
 struct LitVarying {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: the depth pre-pass and the lighting pass must compute bit-identical depths
+    // for the equal test to keep each pixel's nearest fragment.
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
@@ -50,9 +55,24 @@ fn cube_face(d: vec3<f32>) -> u32 {
     return select(5u, 4u, d.z > 0.0);
 }
 
+// The light camera of one shadow layer. Constant indices only: indexing the copied light's
+// matrix array at run time makes compilers keep all six matrices in per-pixel scratch memory
+// (on lavapipe that alone cost a third of the lighting pass).
+fn face_matrix(light: Light, face: u32) -> mat4x4<f32> {
+    switch face {
+        case 1u: { return light.view_proj[1]; }
+        case 2u: { return light.view_proj[2]; }
+        case 3u: { return light.view_proj[3]; }
+        case 4u: { return light.view_proj[4]; }
+        case 5u: { return light.view_proj[5]; }
+        default: { return light.view_proj[0]; }
+    }
+}
+
 struct ShadowCoord {
     uv: vec2<f32>,   // in the light's own map, 0..1
     layer: i32,
+    face: u32,       // the point light's cube face (0 for other lights)
     inside: bool,
 };
 
@@ -60,6 +80,7 @@ fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     var sc: ShadowCoord;
     sc.inside = false;
     sc.layer = -1;
+    sc.face = 0u;
     sc.uv = vec2<f32>(0.0);
     if (light.first_layer < 0.0) {
         return sc;
@@ -68,40 +89,59 @@ fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     if (light.kind == KIND_POINT) {
         face = cube_face(p - light.position);
     }
-    let clip = light.view_proj[face] * vec4<f32>(p, 1.0);
+    let clip = face_matrix(light, face) * vec4<f32>(p, 1.0);
     if (clip.w <= 0.0) {
         return sc;
     }
     let ndc = clip.xyz / clip.w;
     sc.uv = ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
     sc.layer = i32(light.first_layer) + i32(face);
+    sc.face = face;
     sc.inside = all(sc.uv >= vec2<f32>(0.0)) && all(sc.uv <= vec2<f32>(1.0));
     return sc;
 }
 
-// Percentage-closer filtering over a 3x3 texel area with bilinear weights (4x4 loads):
-// linear-depth maps are R32Float, which is not filterable everywhere, so compare by hand.
+// The comparison results of the 2x2 texels around the texel corner `uv`.
+fn shadow_gather(uv: vec2<f32>, layer: i32, reference: f32) -> vec4<f32> {
+    return textureGatherCompare(shadow_depth, shadow_compare, uv, layer, reference);
+}
+
+fn gather_weights(wx: vec2<f32>, wy: vec2<f32>) -> vec4<f32> {
+    return vec4<f32>(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x);
+}
+
+// Percentage-closer filtering over a 3x3 texel area with bilinear weights: a tent of 4x4
+// texels, weights (1 - f, 1, 1, f) per axis. The comparison sampler's gather tests a 2x2 block
+// of texels in one fetch, so four fetches do what sixteen loads and compares did, with the
+// same weights. The receiver's depth is its projected depth after moving it shadow_bias toward
+// the light, which along its ray is the same test as distance - bias <= occluder distance.
 fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     let sc = shadow_coord(light, p);
     if (!sc.inside) {
         return 1.0;
     }
+    let to_light = light_direction(light.kind, light.position, light.direction, p);
+    let biased = face_matrix(light, sc.face) * vec4<f32>(p + to_light * light.shadow_bias, 1.0);
+    // Beyond the far plane nothing was drawn (cleared to 1): lit, as before.
+    let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
     let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
-    let d = light_distance(light.kind, light.position, light.direction, p) - light.shadow_bias;
     let t = sc.uv * size - vec2<f32>(0.5);
     let base = floor(t) - vec2<f32>(1.0);
     let f = t - floor(t);
-    let wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
-    let wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
-    let max_texel = vec2<i32>(i32(size) - 1);
-    var lit = 0.0;
-    for (var j = 0; j < 4; j++) {
-        for (var i = 0; i < 4; i++) {
-            let texel = clamp(vec2<i32>(base) + vec2<i32>(i, j), vec2<i32>(0), max_texel);
-            let occluder = textureLoad(shadow_atlas, texel, sc.layer, 0).r;
-            lit += select(0.0, wx[i] * wy[j], d <= occluder);
-        }
-    }
+    // Weights of the four texels a gather returns: x = (left, bottom), y = (right, bottom),
+    // z = (right, top), w = (left, top).
+    let wx0 = vec2<f32>(1.0 - f.x, 1.0);
+    let wx1 = vec2<f32>(1.0, f.x);
+    let wy0 = vec2<f32>(1.0 - f.y, 1.0);
+    let wy1 = vec2<f32>(1.0, f.y);
+    // Written out rather than looped over arrays: a run-time index into a local array costs
+    // per-pixel scratch memory on some compilers.
+    let corner = (base + vec2<f32>(1.0)) * light.atlas_texel;
+    let step = 2.0 * light.atlas_texel;
+    var lit = dot(shadow_gather(corner, sc.layer, reference), gather_weights(wx0, wy0));
+    lit += dot(shadow_gather(corner + vec2<f32>(step, 0.0), sc.layer, reference), gather_weights(wx1, wy0));
+    lit += dot(shadow_gather(corner + vec2<f32>(0.0, step), sc.layer, reference), gather_weights(wx0, wy1));
+    lit += dot(shadow_gather(corner + vec2<f32>(step, step), sc.layer, reference), gather_weights(wx1, wy1));
     return lit / 9.0;
 }
 

@@ -19,7 +19,9 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("shadow.wgsl", shadow::SHADER),
     ("lighting.wgsl", lighting::SHADER),
     ("tonemap.wgsl", tonemap::SHADER),
-    ("sss.wgsl", sss::SHADER),
+    ("sss.wgsl + sss_direct.wgsl", sss::SHADER),
+    ("sss.wgsl + sss_packed.wgsl", sss::SHADER_PACKED),
+    ("sss.wgsl + sss_workgroup.wgsl", sss::SHADER_WORKGROUP),
     ("copy.wgsl", copy::SHADER),
     (
         "texture_space/irradiance.wgsl",

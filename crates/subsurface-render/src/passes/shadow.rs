@@ -69,6 +69,8 @@ impl ShadowPass {
                 b: 0.0,
                 a: 0.0,
             },
+            // The lighting pass filters shadows with a comparison sampler on the z-buffer.
+            sampled_depth: true,
         };
         Ok(Self(util::LayeredPass::new(
             device,
@@ -78,6 +80,19 @@ impl ShadowPass {
             atlas_size,
             |l| view_uniform(l, light_kinds),
         )))
+    }
+
+    /// The maps as the lighting pass binds them: the atlas and the z-buffer of every layer
+    /// (projected depth of the surface nearest the light, for comparison sampling).
+    pub fn maps(&self) -> crate::passes::lighting::ShadowMaps<'_> {
+        crate::passes::lighting::ShadowMaps {
+            atlas: &self.0.atlas_view,
+            depth: self
+                .0
+                .depth_view
+                .as_ref()
+                .expect("the shadow pass keeps its z-buffer"),
+        }
     }
 
     /// Moves the shadow cameras (same layers and sizes as at creation: the viewer moving a

@@ -6,15 +6,16 @@
 //! * **compulsory**: every texel a step reads is read once and every texel it writes is
 //!   written once; a perfect cache could not do with less, so it is the bound to compare with.
 //! * **per tap**: every texel every tap touches is read from memory (no cache at all): 1-D taps
-//!   bilinearly filter 2 texels, 2-D taps 4, each loading colour, depth and SSS data. The gap
-//!   between the two is what the texture cache has to save.
+//!   bilinearly filter 2 texels, 2-D taps 4, each loading colour, depth and SSS data (direct
+//!   fetch) or one packed texel (packed fetch, after a pack step). The gap between the two is
+//!   what the texture cache has to save.
 //!
 //! Every pixel is counted as skin (the passes read only the centre of the others), and the
 //! six-Gaussian removal of sub-pixel Gaussians is ignored: the per-tap model is an upper
 //! bound, the compulsory one a lower bound.
 
 use crate::passes::{lighting, sss};
-use crate::settings::{SssMethod, SssSettings};
+use crate::settings::{SssFetch, SssMethod, SssSettings};
 
 /// Bytes per texel of `format` (the formats these passes use are all uncompressed).
 fn texel_bytes(format: wgpu::TextureFormat) -> u64 {
@@ -75,16 +76,40 @@ impl PassTraffic {
     }
 }
 
-/// One blur step of `taps` taps besides the centre, each filtering `texels` texels: reads
-/// colour, depth and SSS data at the centre and at every texel of every tap, writes colour.
-fn blur_step(taps: u64, texels: u64) -> PerPixel {
-    let texel = texel_bytes(sss::FORMAT)
-        + texel_bytes(lighting::DEPTH_FORMAT)
-        + texel_bytes(lighting::SSS_FORMAT);
+/// The bytes a tap reads per texel and a blur step writes per pixel when its output feeds
+/// another blur step (`between`) or is the result (`last`).
+struct Texels {
+    tap: u64,
+    between: u64,
+    last: u64,
+}
+
+fn texels(fetch: SssFetch) -> Texels {
+    let colour = texel_bytes(sss::FORMAT);
+    match fetch {
+        SssFetch::Direct => Texels {
+            tap: colour + texel_bytes(lighting::DEPTH_FORMAT) + texel_bytes(lighting::SSS_FORMAT),
+            between: colour,
+            last: colour,
+        },
+        SssFetch::Packed | SssFetch::Workgroup => {
+            let packed = texel_bytes(sss::PACKED_FORMAT);
+            Texels {
+                tap: packed,
+                between: packed,
+                last: colour,
+            }
+        }
+    }
+}
+
+/// One blur step of `taps` taps besides the centre, each filtering `texels` texels of `tap`
+/// bytes: reads the centre and every texel of every tap, writes `write` bytes.
+fn blur_step(tap: u64, write: u64, taps: u64, texels: u64) -> PerPixel {
     PerPixel {
-        read: texel,
-        write: texel_bytes(sss::FORMAT),
-        read_taps: texel * (1 + taps * texels),
+        read: tap,
+        write,
+        read_taps: tap * (1 + taps * texels),
     }
 }
 
@@ -103,27 +128,49 @@ fn plain_step(read: u64, write: u64) -> PerPixel {
 pub fn sss_traffic(settings: &SssSettings, width: u32, height: u32) -> Option<PassTraffic> {
     let colour = texel_bytes(sss::FORMAT);
     let mask = texel_bytes(lighting::SSS_FORMAT);
+    let t = texels(settings.fetch);
+    let packed = settings.fetch != SssFetch::Direct;
+    // The packed fetch starts with the pack step: colour, depth and SSS data in, one packed
+    // texel out.
+    let input = texels(SssFetch::Direct).tap;
+    let pack = if packed {
+        plain_step(input, t.tap)
+    } else {
+        PerPixel::default()
+    };
     let per_pixel = match settings.method {
         SssMethod::None | SssMethod::Texture => return None,
         // One horizontal and one vertical pass of samples - 1 bilinear 1-D taps.
         SssMethod::Separable => {
-            let step = blur_step(u64::from(settings.samples) - 1, 2);
-            step + step
+            let taps = u64::from(settings.samples) - 1;
+            let mut h = blur_step(t.tap, t.between, taps, 2);
+            let mut v = blur_step(t.tap, t.last, taps, 2);
+            if settings.fetch == SssFetch::Workgroup {
+                // Each workgroup loads its stretch and both aprons once (taps past the apron,
+                // which read the texture, are left out).
+                let span = u64::from(sss::WORKGROUP_SPAN) / u64::from(sss::WORKGROUP_TILE);
+                h.read_taps = t.tap * span;
+                v.read_taps = t.tap * span;
+            }
+            pack + h + v
         }
         // One 2-D pass of 12 bilinear 2-D taps.
-        SssMethod::Hable13 => blur_step(12, 4),
+        SssMethod::Hable13 => pack + blur_step(t.tap, t.last, 12, 4),
         SssMethod::Gaussian6 => {
-            // The narrowest Gaussian starts the accumulation: colour and SSS data in, the
-            // weighted colour out.
-            let mut total = plain_step(colour + mask, colour);
+            // The narrowest Gaussian starts the accumulation: the colour and the profile row
+            // in (one packed texel, or colour and SSS data), the weighted colour out.
+            let start_read = if packed { t.tap } else { colour + mask };
+            let mut total = pack + plain_step(start_read, colour);
             for _ in settings.gaussians.iter().filter(|g| **g) {
                 // H: a 7-tap 1-D blur. V: the same, and its weighted result blended into the
                 // accumulation target (the blend reads and writes it).
-                let blur = blur_step(6, 2);
+                let blur = blur_step(t.tap, t.between, 6, 2);
                 total = total + blur + blur + plain_step(colour, colour);
             }
-            // The accumulation written back on skin pixels (SSS data and accumulation in).
-            total + plain_step(mask + colour, colour)
+            // The accumulation written back on skin pixels (which pixels are skin, from the
+            // packed input or the SSS data, and the accumulation in).
+            let skin = if packed { t.tap } else { mask };
+            total + plain_step(skin + colour, colour)
         }
     };
     Some(PassTraffic::from(
@@ -152,6 +199,7 @@ mod tests {
         SssSettings {
             method,
             samples,
+            fetch: SssFetch::Direct,
             ..Default::default()
         }
     }
@@ -191,6 +239,33 @@ mod tests {
         for m in [SssMethod::None, SssMethod::Texture] {
             assert_eq!(sss_traffic(&settings(m, 17), 100, 10), None);
         }
+        // Packed: the pack step (20 in, 16 out), then 16 B per texel of a tap and between the
+        // steps, the last step writing the 8 B colour.
+        let packed = |m| SssSettings {
+            fetch: SssFetch::Packed,
+            ..settings(m, 17)
+        };
+        let sep = sss_traffic(&packed(SssMethod::Separable), 100, 10).unwrap();
+        assert_eq!(sep.read_bytes, px * (20 + 16 + 16));
+        assert_eq!(sep.write_bytes, px * (16 + 16 + 8));
+        assert_eq!(sep.read_bytes_per_tap, px * (20 + 2 * 16 * 33));
+        let hable = sss_traffic(&packed(SssMethod::Hable13), 100, 10).unwrap();
+        assert_eq!((hable.read_bytes, hable.write_bytes), (px * 36, px * 24));
+        assert_eq!(hable.read_bytes_per_tap, px * (20 + 16 * 49));
+        // Pack (20, 16), start (16, 8), five Gaussians of H (16, 16) and V (16 + 8 blend,
+        // 16 + 8), resolve (16 + 8, 8).
+        let g = sss_traffic(&packed(SssMethod::Gaussian6), 100, 10).unwrap();
+        assert_eq!(g.read_bytes, px * (20 + 16 + 5 * 40 + 24));
+        // Workgroup memory: 256 texels loaded per 128 pixels of a line, per pass.
+        let w = SssSettings {
+            fetch: SssFetch::Workgroup,
+            ..settings(SssMethod::Separable, 17)
+        };
+        let w = sss_traffic(&w, 100, 10).unwrap();
+        assert_eq!(w.bytes(), sep.bytes());
+        assert_eq!(w.read_bytes_per_tap, px * (20 + 2 * 16 * 2));
+        assert_eq!(g.write_bytes, px * (16 + 8 + 5 * 40 + 8));
+
         let copy = copy_traffic(1280, 720);
         assert_eq!(copy.bytes(), 1280 * 720 * 16);
         // 14.7 MB at 10 GB/s: 1.47 ms.

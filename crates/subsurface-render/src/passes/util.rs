@@ -121,6 +121,16 @@ pub fn texture_2d(
     })
 }
 
+/// A 1x1 texture's view, to fill a binding a pipeline does not read.
+pub fn dummy_view(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::TextureView {
+    texture_2d(device, label, 1, 1, 1, format, usage).create_view(&Default::default())
+}
+
 /// A render target that later passes sample; the copy usages let it be read back and stand as
 /// either end of a texture copy.
 pub fn render_target(
@@ -129,6 +139,25 @@ pub fn render_target(
     width: u32,
     height: u32,
     format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    render_target_with(
+        device,
+        label,
+        width,
+        height,
+        format,
+        wgpu::TextureUsages::empty(),
+    )
+}
+
+/// A [`render_target`] with `extra` usages.
+pub fn render_target_with(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    extra: wgpu::TextureUsages,
 ) -> wgpu::Texture {
     texture_2d(
         device,
@@ -140,12 +169,13 @@ pub fn render_target(
         wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
+            | wgpu::TextureUsages::COPY_DST
+            | extra,
     )
 }
 
-/// The z-buffer of a [`MeshPipeline`] with `depth_test`; only the render pass uses it, so it
-/// is attachment-only and its contents are discarded (see [`depth_attachment`]).
+/// The z-buffer of a [`MeshPipeline`] with a [`DepthTest`]; only render passes use it, so it
+/// is attachment-only.
 pub fn depth_buffer(
     device: &wgpu::Device,
     label: &str,
@@ -210,9 +240,20 @@ pub struct MeshPipeline<'a> {
     pub fragment: &'a str,
     pub targets: &'a [wgpu::TextureFormat],
     pub cull_mode: Option<wgpu::Face>,
-    /// Keep the nearest surface (less, with depth writes) in a [`depth_buffer`]; without it
-    /// the last triangle drawn wins.
-    pub depth_test: bool,
+    pub depth: DepthTest,
+}
+
+/// How a [`MeshPipeline`] uses its [`depth_buffer`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthTest {
+    /// No z-buffer: the last triangle drawn wins.
+    Off,
+    /// Keep the nearest surface (less, with depth writes).
+    Nearest,
+    /// After a depth pre-pass of the same vertex stage: shade only the fragment whose depth
+    /// the pre-pass kept (equal, no writes), so each pixel is shaded once whatever the
+    /// triangle order.
+    Prepassed,
 }
 
 impl MeshPipeline<'_> {
@@ -231,13 +272,7 @@ impl MeshPipeline<'_> {
                 cull_mode: self.cull_mode,
                 ..Default::default()
             },
-            depth_stencil: self.depth_test.then(|| wgpu::DepthStencilState {
-                format: ZBUFFER_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: depth_state(self.depth),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: self.module,
@@ -249,6 +284,49 @@ impl MeshPipeline<'_> {
             cache: None,
         })
     }
+}
+
+/// A depth-only pipeline (no fragment stage, no culling) with `module`'s `vertex` entry point
+/// writing the nearest surface, for a [`DepthTest::Prepassed`] pipeline of the same vertex
+/// stage to test against.
+pub fn depth_prepass_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    vertex: &str,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("depth prepass"),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: &[Some(VERTEX_LAYOUT)],
+        },
+        primitive: Default::default(),
+        depth_stencil: depth_state(DepthTest::Nearest),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The depth state of `depth` (None for [`DepthTest::Off`]).
+pub fn depth_state(depth: DepthTest) -> Option<wgpu::DepthStencilState> {
+    let (write, compare) = match depth {
+        DepthTest::Off => return None,
+        DepthTest::Nearest => (true, wgpu::CompareFunction::Less),
+        DepthTest::Prepassed => (false, wgpu::CompareFunction::Equal),
+    };
+    Some(wgpu::DepthStencilState {
+        format: ZBUFFER_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
 }
 
 /// A single-sampled colour attachment whose result is stored for the passes after it.
@@ -264,21 +342,6 @@ pub fn color_attachment(
             load,
             store: wgpu::StoreOp::Store,
         },
-    })
-}
-
-/// A [`depth_buffer`] cleared to the far plane; its contents are discarded after the pass,
-/// since no later pass reads them.
-pub fn depth_attachment(
-    view: &wgpu::TextureView,
-) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
-    Some(wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations {
-            load: wgpu::LoadOp::Clear(1.0),
-            store: wgpu::StoreOp::Discard,
-        }),
-        stencil_ops: None,
     })
 }
 
@@ -298,6 +361,10 @@ pub struct LayeredPassDesc<'a> {
     pub view_visibility: wgpu::ShaderStages,
     /// What texels where nothing is drawn hold.
     pub clear: wgpu::Color,
+    /// Keep each layer's z-buffer (Depth32Float, one array layer per shadow layer) for later
+    /// passes to sample with a comparison sampler (hardware PCF), instead of one discarded
+    /// z-buffer for all layers.
+    pub sampled_depth: bool,
 }
 
 /// One shadow layer of a [`LayeredPass`]: its size in texels, its light camera and the atlas
@@ -307,6 +374,8 @@ struct AtlasLayer {
     view_buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     target: wgpu::TextureView,
+    /// Its own layer of the kept z-buffer, or the shared discarded one.
+    depth: wgpu::TextureView,
 }
 
 /// The objects drawn without culling and depth-tested into one atlas layer per shadow layer,
@@ -316,11 +385,15 @@ pub struct LayeredPass {
     clear: wgpu::Color,
     pipeline: wgpu::RenderPipeline,
     layers: Vec<AtlasLayer>,
-    depth: wgpu::TextureView,
+    /// Whether the z-buffer is kept (`sampled_depth`).
+    store_depth: bool,
     /// `atlas_size` texels square, one layer per shadow layer (at least one).
     pub atlas: wgpu::Texture,
     /// All of `atlas` as a `texture_2d_array`.
     pub atlas_view: wgpu::TextureView,
+    /// With `sampled_depth`: the kept z-buffer as a `texture_depth_2d_array` (the projected
+    /// depth of the surface nearest the light, same layers as `atlas`).
+    pub depth_view: Option<wgpu::TextureView>,
 }
 
 impl LayeredPass {
@@ -350,7 +423,7 @@ impl LayeredPass {
             targets: &[desc.format],
             // No culling: thickness needs the surface nearest the light whichever way it faces.
             cull_mode: None,
-            depth_test: true,
+            depth: DepthTest::Nearest,
         }
         .create(device);
         let size = atlas_size.max(1);
@@ -365,7 +438,19 @@ impl LayeredPass {
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
-        let depth = depth_buffer(device, &format!("{label} depth"), size, size);
+        let depth_label = format!("{label} depth");
+        let kept_depth = desc.sampled_depth.then(|| {
+            texture_2d(
+                device,
+                &depth_label,
+                size,
+                size,
+                layers.len().max(1) as u32,
+                ZBUFFER_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+        });
+        let shared_depth = depth_buffer(device, &depth_label, size, size);
         let layers = layers
             .iter()
             .enumerate()
@@ -388,6 +473,9 @@ impl LayeredPass {
                     view_buffer,
                     bind_group,
                     target: layer_view(&atlas, i as u32),
+                    depth: kept_depth
+                        .as_ref()
+                        .map_or_else(|| shared_depth.clone(), |d| layer_view(d, i as u32)),
                 }
             })
             .collect();
@@ -396,9 +484,10 @@ impl LayeredPass {
             clear: desc.clear,
             pipeline,
             layers,
-            depth,
+            store_depth: desc.sampled_depth,
             atlas_view: array_view(&atlas),
             atlas,
+            depth_view: kept_depth.as_ref().map(array_view),
         }
     }
 
@@ -436,7 +525,18 @@ impl LayeredPass {
                         &layer.target,
                         wgpu::LoadOp::Clear(self.clear),
                     )],
-                    depth_stencil_attachment: depth_attachment(&self.depth),
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &layer.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: if self.store_depth {
+                                wgpu::StoreOp::Store
+                            } else {
+                                wgpu::StoreOp::Discard
+                            },
+                        }),
+                        stencil_ops: None,
+                    }),
                     timestamp_writes: timer.writes(),
                     occlusion_query_set: None,
                     multiview_mask: None,

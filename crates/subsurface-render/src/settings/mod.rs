@@ -5,7 +5,7 @@
 mod sss;
 mod transmittance;
 
-pub use sss::{SssMethod, SssSettings};
+pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
 
 use serde::{Deserialize, Serialize};
@@ -35,7 +35,7 @@ macro_rules! method_names {
     )*};
 }
 
-method_names!(SssMethod, TransmittanceMethod);
+method_names!(SssMethod, SssFetch, TransmittanceMethod);
 
 /// A setting out of range. `field` is its path below `[render]` as written in a scene file
 /// (`width`, `sss.samples`, `transmittance.normal_shrink`).

@@ -53,6 +53,38 @@ impl SssMethod {
     }
 }
 
+/// How the screen-space passes fetch a texel of a tap. Both give the same image (the oracle
+/// tests run each); they differ in speed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SssFetch {
+    /// A first pass packs colour, depth, strength, scale and profile row into one Rgba32Uint
+    /// texel per pixel, so a tap reads one texel per footprint texel instead of three.
+    #[default]
+    Packed,
+    /// Every texel of a tap reads the colour, depth and SSS textures (no extra pass or
+    /// memory).
+    Direct,
+    /// Separable: packed texels, and the two 1-D passes run as compute shaders that load each
+    /// line's texels once into workgroup memory (taps past a 64-pixel apron read the
+    /// texture). The vertical pass writes the diffuse texture as a storage texture; where it
+    /// lacks STORAGE_BINDING that pass is a fragment pass. Other methods fetch packed.
+    Workgroup,
+}
+
+impl SssFetch {
+    pub const ALL: [SssFetch; 3] = [SssFetch::Packed, SssFetch::Direct, SssFetch::Workgroup];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SssFetch::Packed => "packed",
+            SssFetch::Direct => "direct",
+            SssFetch::Workgroup => "workgroup",
+        }
+    }
+}
+
 /// Largest separable kernel.
 pub const MAX_SAMPLES: u32 = 63;
 
@@ -67,6 +99,8 @@ pub struct SssSettings {
     /// its weight stands for (Jimenez et al. 2015's jittering, which lets 7 taps stand in for
     /// many): the banding of few taps becomes fine per-pixel noise.
     pub jitter: bool,
+    /// Screen space: how a tap fetches its texels (`packed` or `direct`; same image).
+    pub fetch: SssFetch,
     /// Screen space: weaken taps by their depth difference, so the blur follows the surface
     /// instead of crossing silhouettes and depth edges (Jimenez et al. 2009).
     pub follow_surface: bool,
@@ -92,6 +126,7 @@ impl Default for SssSettings {
             method: SssMethod::Separable,
             samples: DEFAULT_SAMPLES,
             jitter: false,
+            fetch: SssFetch::Packed,
             follow_surface: true,
             edge_mm: 3.0,
             min_sigma_px: 0.25,

@@ -103,6 +103,18 @@ pub fn upload_texture(
     format: wgpu::TextureFormat,
     bytes: &[u8],
 ) -> wgpu::Texture {
+    upload_texture_with(ctx, w, h, format, bytes, wgpu::TextureUsages::empty())
+}
+
+/// As `upload_texture`, with `extra` usages.
+pub fn upload_texture_with(
+    ctx: &GpuContext,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+    extra: wgpu::TextureUsages,
+) -> wgpu::Texture {
     let t = util::texture_2d(
         &ctx.device,
         "test input",
@@ -113,7 +125,8 @@ pub fn upload_texture(
         wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
+            | wgpu::TextureUsages::COPY_DST
+            | extra,
     );
     let texel = format.block_copy_size(None).unwrap();
     ctx.queue.write_texture(

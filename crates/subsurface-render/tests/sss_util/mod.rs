@@ -5,16 +5,22 @@
 use subsurface_profile::oracle::{self, ScreenInput};
 use subsurface_profile::{KernelParams, ScreenKernels};
 use subsurface_render::passes::sss::{SssInputs, SssPass};
-use subsurface_render::{GpuContext, SssMethod, SssSettings};
+use subsurface_render::{GpuContext, SssFetch, SssMethod, SssSettings};
 
-use crate::common::{read4, upload_texture};
+use crate::common::{read4, upload_texture, upload_texture_with};
 
 pub const FOCAL: f32 = 300.0;
 
-/// Rounds colours to f16 as the GPU stores them, so oracle and GPU start from the same input.
+/// Rounds colours, strengths and scales to f16 as the renderer stores them (its diffuse and
+/// SSS targets are Rgba16Float, and the packed fetch keeps them so), so oracle and GPU start
+/// from the same input.
 pub fn to_f16_exact(input: &mut ScreenInput) {
+    let f16 = |v: f32| half::f16::from_f32(v).to_f32();
     for c in &mut input.color {
-        *c = c.map(|v| half::f16::from_f32(v).to_f32());
+        *c = c.map(f16);
+    }
+    for v in input.strength.iter_mut().chain(&mut input.world_per_mm) {
+        *v = f16(*v);
     }
 }
 
@@ -65,6 +71,18 @@ pub fn run_gpu_with(
     config: &SssSettings,
     table: &[ScreenKernels],
 ) -> Vec<[f32; 3]> {
+    run_gpu_on(ctx, input, config, table, true)
+}
+
+/// As `run_gpu_with`; `storage`: whether the diffuse texture allows storage writes (which the
+/// workgroup fetch's vertical compute pass needs, or it falls back to a fragment pass).
+pub fn run_gpu_on(
+    ctx: &GpuContext,
+    input: &ScreenInput,
+    config: &SssSettings,
+    table: &[ScreenKernels],
+    storage: bool,
+) -> Vec<[f32; 3]> {
     let (w, h) = (input.width, input.height);
     let colour: Vec<half::f16> = input
         .color
@@ -72,12 +90,17 @@ pub fn run_gpu_with(
         .flat_map(|c| [c[0], c[1], c[2], 1.0])
         .map(half::f16::from_f32)
         .collect();
-    let diffuse = upload_texture(
+    let diffuse = upload_texture_with(
         ctx,
         w,
         h,
         wgpu::TextureFormat::Rgba16Float,
         bytemuck::cast_slice(&colour),
+        if storage {
+            wgpu::TextureUsages::STORAGE_BINDING
+        } else {
+            wgpu::TextureUsages::empty()
+        },
     );
     let depth = upload_texture(
         ctx,
@@ -170,3 +193,16 @@ pub const METHODS: [SssMethod; 3] = [
     SssMethod::Gaussian6,
     SssMethod::Hable13,
 ];
+
+/// Every screen-space method with every way of fetching texels.
+pub fn methods_and_fetches() -> impl Iterator<Item = (SssMethod, SssFetch, SssSettings)> {
+    METHODS.into_iter().flat_map(|m| {
+        SssFetch::ALL.map(|fetch| {
+            let config = SssSettings {
+                fetch,
+                ..settings(m)
+            };
+            (m, fetch, config)
+        })
+    })
+}

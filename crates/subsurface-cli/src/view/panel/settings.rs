@@ -2,7 +2,7 @@
 //! (the split screen's second side).
 
 use egui::{DragValue, RichText, Slider, Ui};
-use subsurface_render::{SssMethod, TransmittanceMethod};
+use subsurface_render::{SssFetch, SssMethod, TransmittanceMethod};
 
 use super::widgets::{combo, labelled, odd_slider, settings_section, view_combo};
 use crate::view::model::Model;
@@ -33,6 +33,18 @@ fn side_settings(ui: &mut Ui, id: &str, s: &mut Side) -> bool {
             for (k, g) in s.sss.gaussians.iter_mut().enumerate() {
                 changed |= ui.checkbox(g, format!("{}", k + 2)).changed();
             }
+        });
+    }
+    if s.sss.method.is_screen_space() {
+        // Same image either way: switching shows the packed fetch's saving in the timings.
+        changed |= labelled(ui, "fetch", |ui| {
+            combo(
+                ui,
+                &format!("{id} fetch"),
+                &mut s.sss.fetch,
+                SssFetch::ALL,
+                SssFetch::name,
+            )
         });
     }
     if s.sss.method != SssMethod::None {

@@ -46,7 +46,7 @@ impl IrradiancePass {
             targets: &[MAP_FORMAT, STRETCH_FORMAT],
             // UV islands may be laid out with either winding; no depth (one surface per texel).
             cull_mode: None,
-            depth_test: false,
+            depth: util::DepthTest::Off,
         }
         .create(device);
         Self { pipeline }

@@ -50,6 +50,7 @@ impl TsmPass {
                 b: 0.0,
                 a: 0.0,
             },
+            sampled_depth: false,
         };
         Self(util::LayeredPass::new(
             &ctx.device,

@@ -8,6 +8,13 @@
 //! profile per material), and every method reproduces `subsurface_profile::oracle::screen` on
 //! the same inputs.
 //!
+//! Each texel a tap touches needs colour, depth, strength, scale and profile row. With
+//! `fetch = packed` (the default) a pack step first writes them into one Rgba32Uint texel per
+//! pixel and the 1-D passes hand that layout on, so a tap loads one texel per footprint texel
+//! instead of three; `fetch = direct` reads the three textures (no pack step or extra memory).
+//! Both reproduce the oracle (the packed texel keeps colour, strength and scale as f16, which
+//! is what the lighting pass's Rgba16Float targets hold anyway).
+//!
 //! To use it in another wgpu application, give it your own textures:
 //! ```no_run
 //! # fn f(device: &wgpu::Device, queue: &wgpu::Queue, diffuse: &wgpu::Texture,
@@ -30,12 +37,39 @@ use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::passes::util;
-use crate::settings::{SssMethod, SssSettings};
+use crate::settings::{SssFetch, SssMethod, SssSettings};
 use crate::timing::TimedPass;
 
-pub const SHADER: &str = concat!(include_str!("fullscreen.wgsl"), include_str!("sss.wgsl"));
+mod pipelines;
+mod workgroup;
+
+use pipelines::{PipelineKey, Pipelines, Stage};
+
+pub use workgroup::{LINE_SPAN as WORKGROUP_SPAN, LINE_TILE as WORKGROUP_TILE};
+
+/// The passes with the direct fetch (three textures per texel of a tap).
+pub const SHADER: &str = concat!(
+    include_str!("../fullscreen.wgsl"),
+    include_str!("sss.wgsl"),
+    include_str!("sss_direct.wgsl")
+);
+/// The passes with the packed fetch (one Rgba32Uint texel per texel of a tap).
+pub const SHADER_PACKED: &str = concat!(
+    include_str!("../fullscreen.wgsl"),
+    include_str!("sss.wgsl"),
+    include_str!("sss_packed.wgsl")
+);
+/// The packed passes and the separable compute passes that read workgroup memory.
+pub const SHADER_WORKGROUP: &str = concat!(
+    include_str!("../fullscreen.wgsl"),
+    include_str!("sss.wgsl"),
+    include_str!("sss_packed.wgsl"),
+    include_str!("sss_workgroup.wgsl")
+);
 /// Format of the diffuse texture the pass blurs in place (filterable on every adapter).
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The packed fetch's per-pixel texel (see sss_packed.wgsl for the layout).
+pub const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 /// Rows of Hable's 13 taps in the profile table (weight row, offset row).
 const HABLE_ROWS: usize = 26;
 
@@ -66,30 +100,21 @@ struct SssUniform {
 /// TEXTURE_BINDING | RENDER_ATTACHMENT | COPY_SRC, format [`FORMAT`]); `depth` is linear view
 /// depth (R32Float); `sss` holds strength in r (0 = not skin), scene units per profile
 /// millimetre in g and the pixel's row of the profile table in b (any float format; the
-/// lighting pass writes Rgba16Float).
+/// lighting pass writes Rgba16Float, and the packed fetch keeps strength and scale at that
+/// f16 precision whatever the format: use the direct fetch for f32 scales).
 pub struct SssInputs<'a> {
     pub diffuse: &'a wgpu::Texture,
     pub depth: &'a wgpu::TextureView,
     pub sss: &'a wgpu::TextureView,
 }
 
-/// Which pipeline a step runs.
-#[derive(Clone, Copy)]
-enum Stage {
-    Separable,
-    SeparableJitter,
-    Gaussian,
-    Hable13,
-    Accumulate,
-    CopyWeighted,
-    Resolve,
-}
-
 struct Step {
-    stage: Stage,
+    key: PipelineKey,
     bind_group: wgpu::BindGroup,
     target: usize,
     accum: bool,
+    /// A compute step (the workgroup fetch's 1-D passes): its workgroups in x and y.
+    dispatch: Option<[u32; 2]>,
 }
 
 struct Bound {
@@ -97,35 +122,6 @@ struct Bound {
     targets: Vec<wgpu::TextureView>,
     _textures: Vec<wgpu::Texture>,
     copy: Option<(wgpu::Texture, wgpu::Texture)>,
-}
-
-struct Pipelines {
-    separable: wgpu::RenderPipeline,
-    /// The few-sample mode: the separable taps moved per pixel (its own entry point, so the
-    /// plain pass stays exactly as it was).
-    separable_jitter: wgpu::RenderPipeline,
-    gaussian: wgpu::RenderPipeline,
-    hable13: wgpu::RenderPipeline,
-    /// Writes a blurred Gaussian and adds it, weighted, to the accumulation target.
-    accumulate: wgpu::RenderPipeline,
-    /// The narrowest Gaussian (the input times its weight) starts the accumulation.
-    copy_weighted: wgpu::RenderPipeline,
-    /// Writes the accumulation back into the diffuse target, on skin pixels only.
-    resolve: wgpu::RenderPipeline,
-}
-
-impl Pipelines {
-    fn get(&self, stage: Stage) -> &wgpu::RenderPipeline {
-        match stage {
-            Stage::Separable => &self.separable,
-            Stage::SeparableJitter => &self.separable_jitter,
-            Stage::Gaussian => &self.gaussian,
-            Stage::Hable13 => &self.hable13,
-            Stage::Accumulate => &self.accumulate,
-            Stage::CopyWeighted => &self.copy_weighted,
-            Stage::Resolve => &self.resolve,
-        }
-    }
 }
 
 /// The profile table as the shader reads it: per profile, the separable taps, Hable's 13 taps
@@ -148,9 +144,9 @@ fn table_rows(profiles: &[ScreenKernels]) -> Vec<[f32; 4]> {
 /// Screen-space SSS, in place on a diffuse radiance texture.
 pub struct SssPass {
     settings: SssSettings,
-    layout: wgpu::BindGroupLayout,
     pipelines: Pipelines,
     dummy: wgpu::TextureView,
+    dummy_packed: wgpu::TextureView,
     /// One per step of the method (see `uniform`).
     uniforms: Vec<wgpu::Buffer>,
     table: wgpu::Buffer,
@@ -168,48 +164,14 @@ impl SssPass {
         settings: &SssSettings,
         profiles: &[ScreenKernels],
     ) -> Result<Self, RenderError> {
-        let module = util::wgsl_module(device, "sss.wgsl", SHADER);
-        let fragment = wgpu::ShaderStages::FRAGMENT;
-        let tex = |binding| {
-            util::float_texture_entry(binding, fragment, false, wgpu::TextureViewDimension::D2)
+        let dummy_of = |format| {
+            util::dummy_view(
+                device,
+                "sss dummy",
+                format,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("sss"),
-            entries: &[
-                util::uniform_entry(0, fragment),
-                tex(1),
-                tex(2),
-                tex(3),
-                util::storage_entry(4, fragment),
-                tex(5),
-            ],
-        });
-        let pipeline_layout = util::pipeline_layout(device, "sss", &[&layout]);
-        let replace = Some(wgpu::ColorTargetState::from(FORMAT));
-        let additive = Some(util::additive_target(FORMAT));
-        let make = |entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
-            super::fullscreen::pipeline(device, &module, Some(&pipeline_layout), entry, targets)
-        };
-        let one = std::slice::from_ref(&replace);
-        let pipelines = Pipelines {
-            separable: make("fs_separable", one),
-            separable_jitter: make("fs_separable_jitter", one),
-            gaussian: make("fs_gaussian", one),
-            hable13: make("fs_hable13", one),
-            accumulate: make("fs_gaussian_accumulate", &[replace.clone(), additive]),
-            copy_weighted: make("fs_copy", one),
-            resolve: make("fs_resolve", one),
-        };
-        let dummy = util::texture_2d(
-            device,
-            "sss dummy",
-            1,
-            1,
-            1,
-            FORMAT,
-            wgpu::TextureUsages::TEXTURE_BINDING,
-        )
-        .create_view(&Default::default());
         let table = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sss profiles"),
             size: 16,
@@ -218,9 +180,9 @@ impl SssPass {
         });
         let mut pass = Self {
             settings: settings.clone(),
-            layout,
-            pipelines,
-            dummy,
+            pipelines: Pipelines::new(device),
+            dummy: dummy_of(FORMAT),
+            dummy_packed: dummy_of(PACKED_FORMAT),
             uniforms: Vec::new(),
             table,
             profiles: 0,
@@ -363,111 +325,187 @@ impl SssPass {
     /// they change size).
     pub fn resize(&mut self, device: &wgpu::Device, inputs: &SssInputs<'_>) {
         let size = inputs.diffuse.size();
-        let make_target = |label| {
+        let fetch = self.settings.fetch;
+        // Compute steps write their output as a storage texture.
+        let compute = fetch == SssFetch::Workgroup && self.settings.method == SssMethod::Separable;
+        let make_target = |label, format| {
+            let storage = if compute {
+                wgpu::TextureUsages::STORAGE_BINDING
+            } else {
+                wgpu::TextureUsages::empty()
+            };
             util::texture_2d(
                 device,
                 label,
                 size.width,
                 size.height,
                 size.depth_or_array_layers,
-                FORMAT,
+                format,
                 wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_DST,
+                    | wgpu::TextureUsages::COPY_DST
+                    | storage,
             )
         };
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let diffuse_view = view(inputs.diffuse);
+        let packed = fetch != SssFetch::Direct;
+        // The workgroup fetch's fragment steps are the packed fetch's.
+        let fragment_fetch = if packed { SssFetch::Packed } else { fetch };
+        // Binding 1 is the colour a direct step reads (the pack step's input); binding 6 the
+        // packed texel a packed step reads.
         let bg = |uniform: usize, color: &wgpu::TextureView, accum: &wgpu::TextureView| {
-            let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("sss"),
-                layout: &self.layout,
-                entries: &[
-                    entry(0, self.uniforms[uniform].as_entire_binding()),
-                    entry(1, wgpu::BindingResource::TextureView(color)),
-                    entry(2, wgpu::BindingResource::TextureView(inputs.depth)),
-                    entry(3, wgpu::BindingResource::TextureView(inputs.sss)),
-                    entry(4, self.table.as_entire_binding()),
-                    entry(5, wgpu::BindingResource::TextureView(accum)),
-                ],
-            })
+            let (color, packed_in) = if packed {
+                (&self.dummy, color)
+            } else {
+                (color, &self.dummy_packed)
+            };
+            self.bind_group(device, inputs, uniform, color, accum, packed_in)
         };
-        let step = |stage, bind_group, target, accum| Step {
+        let key = |stage, packed_out| PipelineKey {
             stage,
+            fetch: fragment_fetch,
+            packed_out,
+        };
+        let step = |stage, packed_out, bind_group, target, accum| Step {
+            key: key(stage, packed_out),
             bind_group,
             target,
             accum,
+            dispatch: None,
         };
-        // Target indices: 0 = the diffuse input (written in place), then intermediates.
+        let compute_step = |stage, uniform: usize, input, out_packed, out_color, horizontal| {
+            let desc = workgroup::BindGroupDesc {
+                uniform: &self.uniforms[uniform],
+                table: &self.table,
+                input,
+                out_packed,
+                out_color,
+            };
+            Step {
+                key: key(stage, horizontal),
+                bind_group: workgroup::bind_group(device, &self.pipelines.compute_layout, &desc),
+                target: 0,
+                accum: false,
+                dispatch: Some(workgroup::dispatch(size.width, size.height, horizontal)),
+            }
+        };
+        // Target indices: 0 = the diffuse input (written in place), then intermediates; an
+        // intermediate a later step reads is packed with the packed fetch.
+        let between = if packed { PACKED_FORMAT } else { FORMAT };
         let mut textures = Vec::new();
         let mut targets = vec![diffuse_view.clone()];
         let mut steps = Vec::new();
         let mut copy = None;
+        // The packed fetch starts with the pack step into `input` (the last target); the
+        // direct fetch reads the diffuse texture itself.
+        let mut input = diffuse_view.clone();
+        let mut packed_input = None;
+        if packed && self.settings.method.is_screen_space() {
+            let t = make_target("sss packed input", PACKED_FORMAT);
+            input = view(&t);
+            packed_input = Some(input.clone());
+            textures.push(t);
+        }
         match self.settings.method {
             SssMethod::None | SssMethod::Texture => {}
             SssMethod::Separable => {
-                let tmp = make_target("sss tmp");
+                let tmp = make_target("sss tmp", between);
                 let tmp_view = view(&tmp);
                 let stage = if self.settings.jitter {
                     Stage::SeparableJitter
                 } else {
                     Stage::Separable
                 };
-                steps.push(step(stage, bg(0, &diffuse_view, &self.dummy), 1, false));
-                steps.push(step(stage, bg(1, &tmp_view, &self.dummy), 0, false));
+                let dummies = &self.pipelines.compute_dummies;
+                if compute {
+                    let h = compute_step(stage, 0, &input, &tmp_view, &dummies.color, true);
+                    steps.push(h);
+                } else {
+                    steps.push(step(stage, packed, bg(0, &input, &self.dummy), 1, false));
+                }
+                let storage = wgpu::TextureUsages::STORAGE_BINDING;
+                if compute && inputs.diffuse.usage().contains(storage) {
+                    let v =
+                        compute_step(stage, 1, &tmp_view, &dummies.packed, &diffuse_view, false);
+                    steps.push(v);
+                } else {
+                    steps.push(step(stage, false, bg(1, &tmp_view, &self.dummy), 0, false));
+                }
                 targets.push(tmp_view);
                 textures.push(tmp);
             }
             SssMethod::Hable13 => {
-                let tmp = make_target("sss tmp");
-                let tmp_view = view(&tmp);
-                steps.push(step(
-                    Stage::Hable13,
-                    bg(0, &tmp_view, &self.dummy),
-                    0,
-                    false,
-                ));
-                copy = Some((inputs.diffuse.clone(), tmp.clone()));
-                targets.push(tmp_view);
-                textures.push(tmp);
+                if packed {
+                    // The packed copy is the input, so the pass writes the diffuse directly.
+                    steps.push(step(
+                        Stage::Hable13,
+                        false,
+                        bg(0, &input, &self.dummy),
+                        0,
+                        false,
+                    ));
+                } else {
+                    let tmp = make_target("sss tmp", FORMAT);
+                    let tmp_view = view(&tmp);
+                    let bind_group = bg(0, &tmp_view, &self.dummy);
+                    steps.push(step(Stage::Hable13, false, bind_group, 0, false));
+                    copy = Some((inputs.diffuse.clone(), tmp.clone()));
+                    targets.push(tmp_view);
+                    textures.push(tmp);
+                }
             }
             SssMethod::Gaussian6 => {
                 // 1 = horizontal tmp, 2/3 = ping/pong blurred Gaussians, 4 = accumulation.
-                for label in ["sss tmp", "sss ping", "sss pong", "sss accum"] {
-                    let t = make_target(label);
+                for (label, format) in [
+                    ("sss tmp", between),
+                    ("sss ping", between),
+                    ("sss pong", between),
+                    ("sss accum", FORMAT),
+                ] {
+                    let t = make_target(label, format);
                     targets.push(view(&t));
                     textures.push(t);
                 }
-                steps.push(step(
-                    Stage::CopyWeighted,
-                    bg(0, &diffuse_view, &self.dummy),
-                    4,
-                    false,
-                ));
-                let mut source = 0;
+                let start = bg(0, &input, &self.dummy);
+                steps.push(step(Stage::CopyWeighted, false, start, 4, false));
+                let mut source = input.clone();
                 for s in 0..self.gaussian_steps().len() {
                     let blurred = 2 + s % 2;
-                    steps.push(step(
-                        Stage::Gaussian,
-                        bg(1 + 2 * s, &targets[source].clone(), &self.dummy),
-                        1,
-                        false,
-                    ));
-                    steps.push(step(
-                        Stage::Accumulate,
-                        bg(2 + 2 * s, &targets[1].clone(), &self.dummy),
-                        blurred,
-                        true,
-                    ));
-                    source = blurred;
+                    let h = bg(1 + 2 * s, &source, &self.dummy);
+                    steps.push(step(Stage::Gaussian, packed, h, 1, false));
+                    let v = bg(2 + 2 * s, &targets[1].clone(), &self.dummy);
+                    steps.push(step(Stage::Accumulate, packed, v, blurred, true));
+                    source = targets[blurred].clone();
                 }
-                steps.push(step(
-                    Stage::Resolve,
-                    bg(0, &self.dummy, &targets[4].clone()),
-                    0,
-                    false,
-                ));
+                // The resolve reads which pixels are skin from the input (packed or not).
+                let resolve = if packed {
+                    bg(0, &input, &targets[4].clone())
+                } else {
+                    bg(0, &self.dummy, &targets[4].clone())
+                };
+                steps.push(step(Stage::Resolve, false, resolve, 0, false));
+            }
+        }
+        if let Some(packed_input) = packed_input {
+            // The pack step reads the three inputs (direct bindings) whatever the fetch.
+            let bind_group = self.bind_group(
+                device,
+                inputs,
+                0,
+                &diffuse_view,
+                &self.dummy,
+                &self.dummy_packed,
+            );
+            let pack = step(Stage::Pack, true, bind_group, targets.len(), false);
+            steps.insert(0, pack);
+            targets.push(packed_input);
+        }
+        for s in &steps {
+            if s.dispatch.is_some() {
+                self.pipelines.ensure_compute(device, s.key.stage);
+            } else {
+                self.pipelines.ensure_render(device, s.key);
             }
         }
         self.bound = Some(Bound {
@@ -476,6 +514,32 @@ impl SssPass {
             _textures: textures,
             copy,
         });
+    }
+
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        inputs: &SssInputs<'_>,
+        uniform: usize,
+        color: &wgpu::TextureView,
+        accum: &wgpu::TextureView,
+        packed: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let tex = wgpu::BindingResource::TextureView;
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sss"),
+            layout: &self.pipelines.layout,
+            entries: &[
+                entry(0, self.uniforms[uniform].as_entire_binding()),
+                entry(1, tex(color)),
+                entry(2, tex(inputs.depth)),
+                entry(3, tex(inputs.sss)),
+                entry(4, self.table.as_entire_binding()),
+                entry(5, tex(accum)),
+                entry(6, tex(packed)),
+            ],
+        })
     }
 
     /// Records the passes. Call `resize` first; without bound inputs nothing is recorded.
@@ -490,6 +554,19 @@ impl SssPass {
         }
         for s in &bound.steps {
             let timer = TimedPass::begin(profiler, "sss", encoder);
+            if let Some([x, y]) = s.dispatch {
+                {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("sss"),
+                        timestamp_writes: timer.compute_writes(),
+                    });
+                    pass.set_pipeline(self.pipelines.compute(s.key.stage));
+                    pass.set_bind_group(0, &s.bind_group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                timer.end(profiler, encoder);
+                continue;
+            }
             {
                 let attach = |v| util::color_attachment(v, wgpu::LoadOp::Load);
                 let accum_target = [
@@ -505,7 +582,7 @@ impl SssPass {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(self.pipelines.get(s.stage));
+                pass.set_pipeline(self.pipelines.render(s.key));
                 pass.set_bind_group(0, &s.bind_group, &[]);
                 pass.draw(0..3, 0..1);
             }

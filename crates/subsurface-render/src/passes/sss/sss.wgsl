@@ -4,6 +4,10 @@
 // corrected first (non-skin texels, texels of another profile and texels across a depth edge
 // are pulled back to the centre colour). Each pixel reads its kernel from the profile table
 // row its material wrote into the SSS target, so every material keeps its own profile.
+//
+// This file is followed by one of two ways to fetch a texel, which define `centre`,
+// `corrected` and `extent`: sss_direct.wgsl reads the three input textures per texel,
+// sss_packed.wgsl one texel of a packed copy that holds all a tap needs.
 
 struct SssUniform {
     direction: vec2<f32>, // pixel direction of a 1-D pass
@@ -30,7 +34,6 @@ struct SssUniform {
 @group(0) @binding(3) var sss_tex: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read> table: array<vec4<f32>>;
 @group(0) @binding(5) var accum_tex: texture_2d<f32>;
-
 fn profile_of(s: vec4<f32>) -> u32 {
     return min(u32(max(s.b, 0.0) + 0.5), u.profiles - 1u);
 }
@@ -45,8 +48,8 @@ struct Centre {
     base: u32,            // the profile's first table row
 };
 
-fn centre(p: vec2<f32>) -> Centre {
-    let texel = vec2<i32>(p);
+// The centre as the input textures give it.
+fn input_centre(texel: vec2<i32>) -> Centre {
     var c: Centre;
     c.color = textureLoad(color_tex, texel, 0).rgb;
     c.depth = textureLoad(depth_tex, texel, 0).r;
@@ -54,6 +57,11 @@ fn centre(p: vec2<f32>) -> Centre {
     c.strength = s.r;
     c.world_per_mm = s.g;
     c.profile = profile_of(s);
+    return with_footprint(c);
+}
+
+fn with_footprint(centre: Centre) -> Centre {
+    var c = centre;
     c.base = c.profile * u.stride;
     // Perspective-correct footprint: a millimetre on the skin covers focal / depth pixels per
     // scene unit, so the blur keeps its physical size at any distance and resolution. The
@@ -62,29 +70,11 @@ fn centre(p: vec2<f32>) -> Centre {
     return c;
 }
 
-// One texel's colour as a tap sees it: a texel that is not skin, belongs to another profile
-// (another material), or (with follow-surface) lies on another surface, is pulled back to the
-// centre colour, so neither background nor a different material bleeds in (no halo at
-// silhouettes; the depth correction of Jimenez et al. 2009 with the threshold in millimetres
-// on the skin rather than a unitless constant).
-fn corrected(texel: vec2<i32>, c: Centre) -> vec3<f32> {
-    let color = textureLoad(color_tex, texel, 0).rgb;
-    let depth = textureLoad(depth_tex, texel, 0).r;
-    let sss = textureLoad(sss_tex, texel, 0);
-    var s = 0.0;
-    if (sss.r <= 0.0 || profile_of(sss) != c.profile) {
-        s = 1.0;
-    } else if (u.follow_surface != 0u) {
-        s = min(abs(c.depth - depth) / (u.edge_mm * c.world_per_mm), 1.0);
-    }
-    return mix(color, c.color, s);
-}
-
 // Bilinear filtering done by hand over corrected texels: a hardware-filtered fetch would mix a
 // background texel into a skin tap before any correction could see it. Texels with zero
 // weight are not loaded, so a 1-D pass reads two texels per tap.
 fn tap(p: vec2<f32>, c: Centre) -> vec3<f32> {
-    let last = vec2<i32>(textureDimensions(color_tex)) - vec2<i32>(1);
+    let last = extent() - vec2<i32>(1);
     let t = p - vec2<f32>(0.5);
     let i0 = floor(t);
     let f = t - i0;
@@ -105,18 +95,21 @@ fn tap(p: vec2<f32>, c: Centre) -> vec3<f32> {
 }
 
 // Separable SSS (2015): one 1-D pass of the kernel; run horizontally, then vertically.
-@fragment
-fn fs_separable(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let c = centre(in.clip.xy);
+fn separable(p: vec2<f32>, c: Centre) -> vec3<f32> {
     if (c.strength <= 0.0) {
-        return vec4<f32>(c.color, 1.0);
+        return c.color;
     }
     var sum = table[c.base].rgb * c.color;
     for (var i = 1u; i < u.taps; i++) {
         let k = table[c.base + i];
-        sum += k.rgb * tap(in.clip.xy + u.direction * (k.w * c.px_per_mm), c);
+        sum += k.rgb * tap(p + u.direction * (k.w * c.px_per_mm), c);
     }
-    return vec4<f32>(sum, 1.0);
+    return sum;
+}
+
+@fragment
+fn fs_separable(in: FullscreenOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(separable(in.clip.xy, centre(in.clip.xy)), 1.0);
 }
 
 // PCG's output hash (Jarzynski and Olano 2020): integers only, so the CPU oracle
@@ -141,25 +134,33 @@ fn jitter_value(seed: u32, tap: u32) -> f32 {
 // pixel and pass, within the interval its weight stands for, so the few taps' ghost copies of
 // features turn into fine noise (oracle::screen::separable_jittered). The weights are
 // untouched: a flat surface keeps its energy.
-@fragment
-fn fs_separable_jitter(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let c = centre(in.clip.xy);
+// Tap i's offset in mm, moved within its interval (the row of half-widths after the taps).
+fn jittered_offset(seed: u32, i: u32, offset: f32, c: Centre) -> f32 {
+    let width = table[c.base + u.widths + i].x;
+    // Rows i and taps - i are the taps at -o and +o: one number moves both outward or inward
+    // (a random scale of the pair), so their errors cancel on a linear gradient.
+    let xi = jitter_value(seed, min(i, u.taps - i));
+    let outward = select(-1.0, 1.0, offset >= 0.0);
+    return offset + outward * (2.0 * xi - 1.0) * width;
+}
+
+fn separable_jitter(p: vec2<f32>, c: Centre) -> vec3<f32> {
     if (c.strength <= 0.0) {
-        return vec4<f32>(c.color, 1.0);
+        return c.color;
     }
-    let seed = jitter_seed(vec2<u32>(in.clip.xy));
+    let seed = jitter_seed(vec2<u32>(p));
     var sum = table[c.base].rgb * c.color;
     for (var i = 1u; i < u.taps; i++) {
         let k = table[c.base + i];
-        let width = table[c.base + u.widths + i].x;
-        // Rows i and taps - i are the taps at -o and +o: one number moves both outward or
-        // inward (a random scale of the pair), so their errors cancel on a linear gradient.
-        let xi = jitter_value(seed, min(i, u.taps - i));
-        let outward = select(-1.0, 1.0, k.w >= 0.0);
-        let o = k.w + outward * (2.0 * xi - 1.0) * width;
-        sum += k.rgb * tap(in.clip.xy + u.direction * (o * c.px_per_mm), c);
+        let o = jittered_offset(seed, i, k.w, c);
+        sum += k.rgb * tap(p + u.direction * (o * c.px_per_mm), c);
     }
-    return vec4<f32>(sum, 1.0);
+    return sum;
+}
+
+@fragment
+fn fs_separable_jitter(in: FullscreenOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(separable_jitter(in.clip.xy, centre(in.clip.xy)), 1.0);
 }
 
 const G7_W = array<f32, 7>(0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006);
@@ -210,25 +211,6 @@ fn fs_gaussian_accumulate(in: FullscreenOut) -> GaussianAccumOut {
     out.blurred = b;
     out.accum = vec4<f32>(b.rgb * table[c.base + u.gaussians + u.gaussian].rgb, 1.0);
     return out;
-}
-
-// The narrowest Gaussian is the unblurred input times its weights: starts the accumulation.
-@fragment
-fn fs_copy(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let texel = vec2<i32>(in.clip.xy);
-    let base = profile_of(textureLoad(sss_tex, texel, 0)) * u.stride;
-    return vec4<f32>(textureLoad(color_tex, texel, 0).rgb * table[base + u.gaussians].rgb, 1.0);
-}
-
-// Writes the accumulated result back into the diffuse target, on skin pixels only, so every
-// other pixel stays bit-identical.
-@fragment
-fn fs_resolve(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let texel = vec2<i32>(in.clip.xy);
-    if (textureLoad(sss_tex, texel, 0).r <= 0.0) {
-        discard;
-    }
-    return vec4<f32>(textureLoad(accum_tex, texel, 0).rgb, 1.0);
 }
 
 // Hable et al. 2009: one 2-D pass with 13 jittered taps; row 2i = rgb weight, row 2i + 1 =

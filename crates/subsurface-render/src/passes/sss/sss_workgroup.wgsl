@@ -1,0 +1,111 @@
+
+// Separable SSS as compute passes over lines (rows for the horizontal pass, columns for the
+// vertical one): a workgroup loads its stretch of the line, plus an apron on each side, once
+// into workgroup memory, and every tap inside it reads from there instead of the texture. Taps
+// past the apron (wide kernels seen up close) fall back to the texture. The result is the
+// fragment passes' to the bit: the same taps, corrections and bilinear weights.
+
+const LINE_TILE: u32 = 128u;
+const LINE_APRON: i32 = 64;
+const LINE_SPAN: u32 = 256u; // LINE_TILE + 2 LINE_APRON
+
+var<workgroup> line_texels: array<vec4<u32>, 256>;
+
+// The horizontal pass writes the packed layout for the vertical one, which writes the colour.
+@group(0) @binding(7) var out_packed: texture_storage_2d<rgba32uint, write>;
+@group(0) @binding(8) var out_color: texture_storage_2d<rgba16float, write>;
+
+struct Line {
+    origin: i32, // first texel of this workgroup's stretch, along the line
+    across: u32, // the row (horizontal pass) or column (vertical pass)
+    last: i32,   // last texel of the line
+};
+
+fn line_texel(along: i32, line: Line) -> vec2<i32> {
+    if (u.direction.x > 0.5) {
+        return vec2<i32>(along, i32(line.across));
+    }
+    return vec2<i32>(i32(line.across), along);
+}
+
+fn line_fetch(along: i32, line: Line) -> vec4<u32> {
+    let k = along - (line.origin - LINE_APRON);
+    if (k >= 0 && k < i32(LINE_SPAN)) {
+        return line_texels[k];
+    }
+    return textureLoad(packed_tex, line_texel(along, line), 0);
+}
+
+// `tap` (sss.wgsl) along the line: q is the tap's position along it, in pixels.
+fn line_tap(q: f32, line: Line, c: Centre) -> vec3<f32> {
+    let t = q - 0.5;
+    let i0 = floor(t);
+    let f = t - i0;
+    var v = corrected_texel(line_fetch(clamp(i32(i0), 0, line.last), line), c);
+    if (f > 0.0) {
+        let b = corrected_texel(line_fetch(clamp(i32(i0) + 1, 0, line.last), line), c);
+        v = mix(v, b, f);
+    }
+    return v;
+}
+
+// Loads the workgroup's stretch and its apron (clamped at the line's ends, as `tap` clamps)
+// into workgroup memory.
+fn load_line(group: vec3<u32>, index: u32) -> Line {
+    let size = extent();
+    var line: Line;
+    line.last = select(size.y, size.x, u.direction.x > 0.5) - 1;
+    line.across = group.y;
+    line.origin = i32(group.x * LINE_TILE);
+    for (var k = index; k < LINE_SPAN; k += LINE_TILE) {
+        let along = clamp(line.origin - LINE_APRON + i32(k), 0, line.last);
+        line_texels[k] = textureLoad(packed_tex, line_texel(along, line), 0);
+    }
+    workgroupBarrier();
+    return line;
+}
+
+fn store_line(texel: vec2<i32>, sum: vec3<f32>, c: Centre) {
+    if (u.seed == 0u) {
+        textureStore(out_packed, texel, pack(sum, c));
+    } else {
+        textureStore(out_color, texel, vec4<f32>(sum, 1.0));
+    }
+}
+
+// One 1-D pass of the kernel over this workgroup's stretch; `jittered`: the few-sample mode's
+// moved taps (separable_jitter in sss.wgsl).
+fn separable_line(group: vec3<u32>, index: u32, jittered: bool) {
+    let line = load_line(group, index);
+    let along = line.origin + i32(index);
+    if (along > line.last) {
+        return;
+    }
+    let c = centre_of(line_texels[u32(LINE_APRON) + index]);
+    let texel = line_texel(along, line);
+    var sum = c.color;
+    if (c.strength > 0.0) {
+        let q = f32(along) + 0.5;
+        let seed = jitter_seed(vec2<u32>(texel));
+        sum = table[c.base].rgb * c.color;
+        for (var i = 1u; i < u.taps; i++) {
+            let k = table[c.base + i];
+            var o = k.w;
+            if (jittered) {
+                o = jittered_offset(seed, i, k.w, c);
+            }
+            sum += k.rgb * line_tap(q + o * c.px_per_mm, line, c);
+        }
+    }
+    store_line(texel, sum, c);
+}
+
+@compute @workgroup_size(128)
+fn cs_separable(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    separable_line(group, index, false);
+}
+
+@compute @workgroup_size(128)
+fn cs_separable_jitter(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    separable_line(group, index, true);
+}
