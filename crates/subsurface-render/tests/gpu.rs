@@ -86,6 +86,96 @@ fn shadow_caster_darkens_the_receiver() {
     }
 }
 
+/// Percentage-closer filtering across a straight shadow edge: a tent of 3x3 texels over a
+/// binary edge is a linear ramp 3 shadow-map texels wide (the box-filtered texels 0, 1/3, 2/3,
+/// 1, interpolated). Measured on the receiver against the same scene without the occluder, on
+/// one row of pixels: monotone, from shadow to light, and a straight line in between (the
+/// comparison gathers' weights in the wrong order or place would zigzag or bend it).
+#[test]
+fn pcf_penumbra_is_a_linear_ramp() {
+    let Some(ctx) = context() else { return };
+    let (w, h) = (256u32, 64u32);
+    let render = |with_occluder: bool| {
+        let occluder = if with_occluder {
+            r#"
+            [[objects]]
+            mesh = { shape = "slab", width = 4.0, height = 1.5, thickness = 0.02 }
+            translation = [-2.0, 0.0, 0.5]
+            rotation_deg = [0.0, -18.435, 0.0]
+            "#
+        } else {
+            ""
+        };
+        let light = light_toml(
+            "directional",
+            [-1.0, 0.0, 3.0],
+            1.0,
+            "shadow_map_size = 64\nshadow_bias = 0.001",
+        );
+        let objects = format!(
+            r#"
+            [[objects]]
+            mesh = {{ shape = "slab", width = 8.0, height = 1.0, thickness = 0.05 }}
+            rotation_deg = [0.0, -18.435, 0.0]
+            {occluder}
+            "#
+        );
+        let s = dark_scene(&camera_toml(4.0, 20.0, ""), &light, &objects);
+        let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
+        r.render().unwrap();
+        let depth = r.read_linear_depth().unwrap();
+        let d = r.read_diffuse().unwrap();
+        let row = (h / 2 * w) as usize;
+        (0..w as usize)
+            .map(|x| (depth[row + x], luminance(d[row + x])))
+            .collect::<Vec<_>>()
+    };
+    let open = render(false);
+    let shadowed = render(true);
+    // The receiver's own pixels beside the occluder (the same depth in both images). Both face
+    // the light, so the receiver is flat in the shadow map (no self-shadowing texel pattern).
+    let ratio: Vec<f32> = open
+        .iter()
+        .zip(&shadowed)
+        .filter(|(o, s)| (o.0 - s.0).abs() < 1e-4 && o.1 > 0.1)
+        .map(|(o, s)| s.1 / o.1)
+        .collect();
+    assert!(ratio.len() > 64, "{} receiver pixels", ratio.len());
+    assert!(
+        ratio[0] < 0.02 && ratio[ratio.len() - 1] > 0.98,
+        "{ratio:?}"
+    );
+    for pair in ratio.windows(2) {
+        assert!(pair[1] >= pair[0] - 2e-3, "not monotone: {ratio:?}");
+    }
+    let ramp: Vec<(f32, f32)> = ratio
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| (0.05..0.95).contains(*r))
+        .map(|(i, r)| (i as f32, *r))
+        .collect();
+    assert!(ramp.len() >= 12, "penumbra {} px: {ratio:?}", ramp.len());
+    let n = ramp.len() as f32;
+    let (mx, my) = ramp
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    let sxy: f32 = ramp.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f32 = ramp.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    let slope = sxy / sxx;
+    let worst = ramp
+        .iter()
+        .map(|(x, y)| (y - (my + slope * (x - mx))).abs())
+        .fold(0.0, f32::max);
+    eprintln!(
+        "penumbra: {} px, slope {slope:.4} per px, worst deviation from a line {worst:.4}",
+        ramp.len()
+    );
+    assert!(
+        worst < 0.03,
+        "penumbra not a straight ramp ({worst}): {ratio:?}"
+    );
+}
+
 #[test]
 fn linear_depth_matches_camera_distance() {
     let Some(ctx) = context() else { return };
