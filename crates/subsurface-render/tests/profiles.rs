@@ -8,7 +8,7 @@ mod sss_util;
 use common::{camera_toml, context, light_toml, scene};
 use sss_util::*;
 use subsurface_profile::oracle::{self, ScreenInput};
-use subsurface_render::{RenderOptions, Renderer, SssFetch, SssMethod, SssSettings};
+use subsurface_render::{RenderOptions, Renderer, SssMethod, SssSettings};
 
 /// Three materials side by side, each with its own profile row: a 96x64 card split into skin
 /// (left), marble (middle) and ketchup (right), at one depth so only the profile boundary

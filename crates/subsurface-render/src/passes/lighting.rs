@@ -51,15 +51,19 @@ impl LightingTargets {
         Self {
             width,
             height,
-            // Storage too: the workgroup fetch's vertical SSS pass writes it from a compute
-            // shader.
+            // Storage too where the adapter can: the workgroup fetch's vertical SSS pass
+            // writes it from a compute shader.
             diffuse: util::render_target_with(
                 device,
                 "diffuse",
                 width,
                 height,
                 RADIANCE_FORMAT,
-                wgpu::TextureUsages::STORAGE_BINDING,
+                if util::supports_compute_storage(device) {
+                    wgpu::TextureUsages::STORAGE_BINDING
+                } else {
+                    wgpu::TextureUsages::empty()
+                },
             ),
             specular: target("specular", RADIANCE_FORMAT),
             depth: target("linear depth", DEPTH_FORMAT),

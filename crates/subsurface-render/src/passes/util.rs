@@ -121,6 +121,16 @@ pub fn texture_2d(
     })
 }
 
+/// Whether the device runs the compute passes that write storage textures (the SSS workgroup
+/// fetch): not on downlevel adapters such as WebGL2.
+pub fn supports_compute_storage(device: &wgpu::Device) -> bool {
+    let l = device.limits();
+    l.max_storage_textures_per_shader_stage >= 2
+        && l.max_compute_invocations_per_workgroup >= 128
+        && l.max_compute_workgroup_size_x >= 128
+        && l.max_compute_workgroup_storage_size >= 4096
+}
+
 /// A 1x1 texture's view, to fill a binding a pipeline does not read.
 pub fn dummy_view(
     device: &wgpu::Device,

@@ -68,7 +68,8 @@ pub enum SssFetch {
     /// Separable: packed texels, and the two 1-D passes run as compute shaders that load each
     /// line's texels once into workgroup memory (taps past a 64-pixel apron read the
     /// texture). The vertical pass writes the diffuse texture as a storage texture; where it
-    /// lacks STORAGE_BINDING that pass is a fragment pass. Other methods fetch packed.
+    /// lacks STORAGE_BINDING that pass is a fragment pass. Other methods, and adapters without
+    /// compute shaders and storage textures, fetch packed.
     Workgroup,
 }
 

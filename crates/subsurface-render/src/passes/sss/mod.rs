@@ -327,7 +327,12 @@ impl SssPass {
         let size = inputs.diffuse.size();
         let fetch = self.settings.fetch;
         // Compute steps write their output as a storage texture.
-        let compute = fetch == SssFetch::Workgroup && self.settings.method == SssMethod::Separable;
+        let compute = fetch == SssFetch::Workgroup
+            && self.settings.method == SssMethod::Separable
+            && util::supports_compute_storage(device);
+        if compute {
+            self.pipelines.prepare_compute(device);
+        }
         let make_target = |label, format| {
             let storage = if compute {
                 wgpu::TextureUsages::STORAGE_BINDING
@@ -374,6 +379,12 @@ impl SssPass {
             accum,
             dispatch: None,
         };
+        let parts = || {
+            self.pipelines
+                .compute
+                .as_ref()
+                .expect("prepared for compute")
+        };
         let compute_step = |stage, uniform: usize, input, out_packed, out_color, horizontal| {
             let desc = workgroup::BindGroupDesc {
                 uniform: &self.uniforms[uniform],
@@ -384,7 +395,7 @@ impl SssPass {
             };
             Step {
                 key: key(stage, horizontal),
-                bind_group: workgroup::bind_group(device, &self.pipelines.compute_layout, &desc),
+                bind_group: workgroup::bind_group(device, &parts().layout, &desc),
                 target: 0,
                 accum: false,
                 dispatch: Some(workgroup::dispatch(size.width, size.height, horizontal)),
@@ -417,17 +428,16 @@ impl SssPass {
                 } else {
                     Stage::Separable
                 };
-                let dummies = &self.pipelines.compute_dummies;
                 if compute {
-                    let h = compute_step(stage, 0, &input, &tmp_view, &dummies.color, true);
-                    steps.push(h);
+                    let color = &parts().dummies.color;
+                    steps.push(compute_step(stage, 0, &input, &tmp_view, color, true));
                 } else {
                     steps.push(step(stage, packed, bg(0, &input, &self.dummy), 1, false));
                 }
                 let storage = wgpu::TextureUsages::STORAGE_BINDING;
                 if compute && inputs.diffuse.usage().contains(storage) {
-                    let v =
-                        compute_step(stage, 1, &tmp_view, &dummies.packed, &diffuse_view, false);
+                    let packed_dummy = &parts().dummies.packed;
+                    let v = compute_step(stage, 1, &tmp_view, packed_dummy, &diffuse_view, false);
                     steps.push(v);
                 } else {
                     steps.push(step(stage, false, bg(1, &tmp_view, &self.dummy), 0, false));

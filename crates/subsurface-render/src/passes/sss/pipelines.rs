@@ -58,12 +58,18 @@ pub struct Pipelines {
     /// Shader modules of the direct, the packed and the workgroup fetch.
     modules: [Option<wgpu::ShaderModule>; 3],
     render: Vec<(PipelineKey, wgpu::RenderPipeline)>,
+    /// The workgroup fetch's layouts and pipelines, made when first used (never on adapters
+    /// without compute shaders and storage textures).
+    pub compute: Option<ComputeParts>,
+}
+
+pub struct ComputeParts {
     /// Group 0 of the workgroup fetch's compute steps.
-    pub compute_layout: wgpu::BindGroupLayout,
-    compute_pipeline_layout: wgpu::PipelineLayout,
-    /// The workgroup fetch's compute pipelines, by stage.
-    compute: Vec<(Stage, wgpu::ComputePipeline)>,
-    pub compute_dummies: workgroup::Dummies,
+    pub layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// The compute pipelines, by stage.
+    pipelines: Vec<(Stage, wgpu::ComputePipeline)>,
+    pub dummies: workgroup::Dummies,
 }
 
 impl Pipelines {
@@ -95,18 +101,26 @@ impl Pipelines {
             ],
         });
         let pipeline_layout = util::pipeline_layout(device, "sss", &[&layout]);
-        let compute_layout = workgroup::layout(device);
-        let compute_pipeline_layout =
-            util::pipeline_layout(device, "sss workgroup", &[&compute_layout]);
         Self {
             layout,
             pipeline_layout,
             modules: [None, None, None],
             render: Vec::new(),
-            compute_layout,
-            compute_pipeline_layout,
-            compute: Vec::new(),
-            compute_dummies: workgroup::Dummies::new(device),
+            compute: None,
+        }
+    }
+
+    /// Makes the compute steps' layouts (once); call before building their bind groups.
+    pub fn prepare_compute(&mut self, device: &wgpu::Device) {
+        if self.compute.is_none() {
+            let layout = workgroup::layout(device);
+            let pipeline_layout = util::pipeline_layout(device, "sss workgroup", &[&layout]);
+            self.compute = Some(ComputeParts {
+                layout,
+                pipeline_layout,
+                pipelines: Vec::new(),
+                dummies: workgroup::Dummies::new(device),
+            });
         }
     }
 
@@ -148,7 +162,9 @@ impl Pipelines {
 
     /// Makes the compute pipeline of `stage` (separable, fixed or jittered) unless made before.
     pub fn ensure_compute(&mut self, device: &wgpu::Device, stage: Stage) {
-        if self.compute.iter().any(|(s, _)| *s == stage) {
+        self.prepare_compute(device);
+        let made = self.compute.as_ref().map(|c| &c.pipelines);
+        if made.is_some_and(|p| p.iter().any(|(s, _)| *s == stage)) {
             return;
         }
         let module = self.module(device, SssFetch::Workgroup);
@@ -156,8 +172,9 @@ impl Pipelines {
             Stage::SeparableJitter => "cs_separable_jitter",
             _ => "cs_separable",
         };
-        let pipeline = workgroup::pipeline(device, &module, &self.compute_pipeline_layout, entry);
-        self.compute.push((stage, pipeline));
+        let parts = self.compute.as_mut().expect("prepared above");
+        let pipeline = workgroup::pipeline(device, &module, &parts.pipeline_layout, entry);
+        parts.pipelines.push((stage, pipeline));
     }
 
     pub fn render(&self, key: PipelineKey) -> &wgpu::RenderPipeline {
@@ -166,7 +183,8 @@ impl Pipelines {
     }
 
     pub fn compute(&self, stage: Stage) -> &wgpu::ComputePipeline {
-        let found = self.compute.iter().find(|(s, _)| *s == stage);
+        let parts = self.compute.as_ref();
+        let found = parts.and_then(|c| c.pipelines.iter().find(|(s, _)| *s == stage));
         &found.expect("resize makes every step's pipeline").1
     }
 }
