@@ -1,7 +1,9 @@
 //! The lighting pass: Lambert diffuse with albedo, Kelemen/Szirmay-Kalos specular, normal
-//! maps, spot falloff, inverse-square attenuation and PCF-filtered linear-depth shadows. It
-//! writes diffuse and specular apart (only diffuse is blurred by subsurface scattering),
-//! linear depth and the per-pixel SSS strength.
+//! maps, spot falloff, inverse-square attenuation and shadows filtered by percentage-closer
+//! gathers on the shadow maps' z-buffer (linear light distance stays for thickness). A depth
+//! pre-pass first keeps the nearest surface, so the shader runs once per pixel. It writes
+//! diffuse and specular apart (only diffuse is blurred by subsurface scattering), linear depth
+//! and the per-pixel SSS strength.
 //!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
@@ -88,8 +90,8 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::TextureViewDimension::D2Array,
         )
     };
-    // The shadow maps' z-buffer, read through a comparison sampler: each fetch tests and
-    // bilinearly filters 2x2 texels in the texture unit (hardware PCF).
+    // The shadow maps' z-buffer, read through a comparison sampler: each gather tests a 2x2
+    // block of texels in the texture unit (hardware PCF).
     let depth = wgpu::BindGroupLayoutEntry {
         binding: 4,
         visibility: wgpu::ShaderStages::FRAGMENT,
