@@ -360,6 +360,7 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     uniform.transmittance = transmittance.method.code();
     uniform.normal_shrink = transmittance.normal_shrink;
     uniform.thickness_filter = transmittance.thickness_filter;
+    uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {
         let (u, light_layers) = light_uniform(i, l, centre, radius, atlas_size, layers.len());

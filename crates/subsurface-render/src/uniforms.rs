@@ -56,6 +56,10 @@ pub struct LightsUniform {
     pub ambient: [f32; 3],
     /// Scene units the shaded point moves inward before the shadow-map lookup.
     pub normal_shrink: f32,
+    /// 1 when subsurface scattering runs (any method but `none`): the diffuse light's shadow
+    /// is looked up where the refracted light feeds the diffusion source.
+    pub scattering: u32,
+    pub _pad: [u32; 3],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 

@@ -117,6 +117,7 @@ fn pcf_penumbra_is_a_linear_ramp() {
             [[objects]]
             mesh = {{ shape = "slab", width = 8.0, height = 1.0, thickness = 0.05 }}
             rotation_deg = [0.0, -18.435, 0.0]
+            material = {{ sss_strength = 0.0 }}
             {occluder}
             "#
         );
@@ -174,6 +175,85 @@ fn pcf_penumbra_is_a_linear_ramp() {
         worst < 0.03,
         "penumbra not a straight ramp ({worst}): {ratio:?}"
     );
+}
+
+/// Oblique light feeds a diffusion source 1 / sigma_t' along the refracted ray, so a scattering
+/// surface's diffuse light is shadowed as the surface tan(theta_t) / sigma_t' back toward the
+/// light is: the penumbra of the light before the blur moves away from the light by that much
+/// per channel, and not at all without SSS. A skin1 receiver at 1 mm per unit, lit at 45
+/// degrees past an occluder's edge: theta_t = asin(sin 45 / 1.3), red's sigma_t' = 0.772 / mm,
+/// so red moves 0.84 mm and green and blue the ratios of sigma_t' (0.735, 0.518) of that.
+#[test]
+fn oblique_light_moves_the_diffusion_source_away_from_the_light() {
+    let Some(ctx) = context() else { return };
+    let (w, h) = (256u32, 64u32);
+    let light = light_toml(
+        "directional",
+        [-1.0, 0.0, 1.0],
+        1.0,
+        "shadow_map_size = 128\nshadow_bias = 0.3",
+    );
+    let objects = r#"
+        [[objects]]
+        mesh = { shape = "slab", width = 8.0, height = 1.0, thickness = 0.05 }
+        mm_per_unit = 1.0
+        material = { medium = "skin1" }
+        [[objects]]
+        mesh = { shape = "slab", width = 4.0, height = 1.5, thickness = 0.02 }
+        translation = [-2.0, 0.0, 0.5]
+        material = { sss_strength = 0.0 }
+        "#;
+    let s = dark_scene(&camera_toml(4.0, 20.0, ""), &light, objects);
+    // The lit image before the blur, per channel, along the middle row; the receiver's own
+    // pixels right of the occluder (front face 3.975 away).
+    let row = |method: SssMethod| {
+        let mut o = options(&s, w, h);
+        o.settings.sss.method = method;
+        // Without transmittance: the occluder would pass for the far side of a thin part.
+        o.settings.transmittance.method = subsurface_render::TransmittanceMethod::Off;
+        o.view = subsurface_render::DebugView::DiffuseBeforeSss;
+        let mut r = Renderer::new(&ctx, &s, o).unwrap();
+        r.render().unwrap();
+        let depth = r.read_linear_depth().unwrap();
+        let d = r.read_diffuse().unwrap();
+        let start = (h / 2 * w) as usize;
+        (0..w as usize)
+            .filter(|x| (depth[start + x] - 3.975).abs() < 1e-3)
+            .map(|x| (x as f32, d[start + x]))
+            .collect::<Vec<_>>()
+    };
+    // Where channel c first reaches half its lit value, interpolated between pixels.
+    let crossing = |px: &[(f32, [f32; 4])], c: usize| {
+        let lit = px.iter().map(|p| p.1[c]).fold(0.0, f32::max);
+        let i = px
+            .iter()
+            .position(|p| p.1[c] >= 0.5 * lit)
+            .expect("a lit side");
+        assert!(
+            i > 0 && px[0].1[c] < 0.1 * lit,
+            "channel {c}: no shadow before the edge"
+        );
+        let (a, b) = (px[i - 1], px[i]);
+        a.0 + (0.5 * lit - a.1[c]) / (b.1[c] - a.1[c]) * (b.0 - a.0)
+    };
+    let plain = row(SssMethod::None);
+    let scattered = row(SssMethod::Separable);
+    // Scene units (mm) per pixel on the receiver's face.
+    let mm_per_px = 2.0 * 3.975 * (10f32).to_radians().tan() / h as f32;
+    let sin_t = (45f32).to_radians().sin() / 1.3;
+    let red_mm = sin_t / (1.0 - sin_t * sin_t).sqrt() / 0.772;
+    let shift: Vec<f32> = (0..3)
+        .map(|c| (crossing(&scattered, c) - crossing(&plain, c)) * mm_per_px)
+        .collect();
+    eprintln!("shift of the penumbra, mm: {shift:?} (red predicted {red_mm:.3})");
+    assert!((shift[0] / red_mm - 1.0).abs() < 0.05, "{shift:?}");
+    for (c, ratio) in [(1, 0.772 / 1.05), (2, 0.772 / 1.49)] {
+        let got = shift[c] / shift[0];
+        assert!(
+            (got - ratio).abs() < 0.03,
+            "channel {c}: {got} of red, want {ratio}"
+        );
+    }
 }
 
 #[test]

@@ -39,6 +39,10 @@ struct Lights {
     thickness_view: u32,   // 1: write the thickness instead of diffuse (debug view)
     ambient: vec3<f32>,
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
+    scattering: u32,       // 1: subsurface scattering runs (source_shadow in lighting.wgsl)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
     lights: array<Light, MAX_LIGHTS>,
 };
 

@@ -220,6 +220,35 @@ struct Shading {
     specular: vec3<f32>,
 };
 
+// The light's visibility for the diffusion seen at p, per channel. Light entering at an angle
+// refracts, and the diffusion source it feeds lies 1 / sigma_t' along the refracted ray
+// (Jensen et al. 2001's real source), so the source under p was lit where the refracted ray
+// entered: tan(theta_t) / sigma_t' back toward the light, per channel. Red's entry point is
+// looked up first; where it sees the same shadow as p itself (everywhere but near shadow
+// edges), green and blue, whose sources lie between, see it too.
+fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, shadow: f32) -> vec3<f32> {
+    let cos_i = dot(n_vertex, l);
+    let scatters = lights.scattering != 0u && object.sss_strength > 0.0;
+    if (!scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
+        return vec3<f32>(shadow);
+    }
+    let sin_t = sqrt(max(1.0 - cos_i * cos_i, 0.0)) / object.eta;
+    let tan_t = sin_t / sqrt(max(1.0 - sin_t * sin_t, 1e-6));
+    let along = l - n_vertex * cos_i; // toward the light, in the tangent plane
+    let len = length(along);
+    if (len < 1e-6 || tan_t < 1e-4) {
+        return vec3<f32>(shadow);
+    }
+    let step = along / len * (tan_t * object.world_per_mm);
+    let red = shadow_factor(light, p + step / object.extinction.x);
+    if (red == shadow) {
+        return vec3<f32>(shadow);
+    }
+    let green = shadow_factor(light, p + step / object.extinction.y);
+    let blue = shadow_factor(light, p + step / object.extinction.z);
+    return vec3<f32>(red, green, blue);
+}
+
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
 fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool) -> Shading {
@@ -258,7 +287,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         if (dark) {
             continue;
         }
-        s.irradiance += radiance * shadow * max(dot(n, l), 0.0);
+        s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
         let t = transmittance(light, world, n_vertex, l, v, shadow);
         s.transmitted += radiance * t.diffuse;
         s.specular += radiance * (shadow * ks_specular(n, l, v, m, rho_s) + t.ballistic);
