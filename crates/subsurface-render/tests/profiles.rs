@@ -8,7 +8,7 @@ mod sss_util;
 use common::{camera_toml, context, light_toml, scene};
 use sss_util::*;
 use subsurface_profile::oracle::{self, ScreenInput};
-use subsurface_render::{RenderOptions, Renderer, SssMethod, SssSettings};
+use subsurface_render::{DebugView, RenderOptions, Renderer, SssMethod, SssSettings};
 
 /// Three materials side by side, each with its own profile row: a 96x64 card split into skin
 /// (left), marble (middle) and ketchup (right), at one depth so only the profile boundary
@@ -120,19 +120,22 @@ material = {{ medium = "ketchup" }}
 /// The whole renderer, three materials in one frame: the lighting pass writes each pixel's
 /// profile row, and every pixel of the blurred image equals the oracle run with the
 /// renderer's own profile table on the unblurred image (read back from the same frame
-/// rendered without SSS).
+/// rendered without the SSS passes).
 #[test]
 fn renderer_blurs_skin_marble_and_ketchup_each_with_its_own_profile() {
     let Some(ctx) = context() else { return };
     let s = scene(&three_slabs());
-    let render = |method| {
+    let render = |method, view| {
         let mut opts = RenderOptions::from_scene(&s);
         opts.settings.sss.method = method;
+        opts.view = view;
         let mut r = Renderer::new(&ctx, &s, opts).unwrap();
         r.render().unwrap();
         r
     };
-    let plain = render(SssMethod::None);
+    // The lit image the blur starts from: with SSS on (the lighting looks the diffuse light's
+    // shadow up where the diffusion source was lit), the SSS passes skipped.
+    let plain = render(SssMethod::Separable, DebugView::DiffuseBeforeSss);
     let sss = plain.read_sss().unwrap();
     let (w, h) = (192u32, 96u32);
     let mut input = ScreenInput::uniform(w, h, [0.0; 3], 1.0, 0.0, 1.0);
@@ -155,7 +158,7 @@ fn renderer_blurs_skin_marble_and_ketchup_each_with_its_own_profile() {
         assert!(count > 500, "profile row {row} covers {count} pixels");
     }
     for method in METHODS {
-        let r = render(method);
+        let r = render(method, DebugView::Final);
         let table = &r.profile_table().kernels;
         assert_eq!(table.len(), 3);
         let config = &r_settings(&s, method);
