@@ -22,6 +22,7 @@ use crate::uniforms::{CameraUniform, LightsUniform};
 pub const SHADER: &str = concat!(
     include_str!("common.wgsl"),
     include_str!("lighting.wgsl"),
+    include_str!("shadow_lookup.wgsl"),
     include_str!("transmittance.wgsl")
 );
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;

@@ -7,9 +7,6 @@
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> lights: Lights;
 @group(0) @binding(2) var shadow_atlas: texture_2d_array<f32>;
-// The same maps' z-buffer, for percentage-closer filtering in the texture unit.
-@group(0) @binding(4) var shadow_depth: texture_depth_2d_array;
-@group(0) @binding(5) var shadow_compare: sampler_comparison;
 
 struct LitVarying {
     // Invariant: the depth pre-pass and the lighting pass must compute bit-identical depths
@@ -42,108 +39,6 @@ struct GBuffer {
     @location(2) depth: f32,
     @location(3) sss: vec4<f32>,   // strength, scene units per profile mm, profile index
 };
-
-// Point lights keep six layers in the order +X, -X, +Y, -Y, +Z, -Z (see shadow.rs).
-fn cube_face(d: vec3<f32>) -> u32 {
-    let a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) {
-        return select(1u, 0u, d.x > 0.0);
-    }
-    if (a.y >= a.z) {
-        return select(3u, 2u, d.y > 0.0);
-    }
-    return select(5u, 4u, d.z > 0.0);
-}
-
-// The light camera of one shadow layer. Constant indices only: indexing the copied light's
-// matrix array at run time makes compilers keep all six matrices in per-pixel scratch memory
-// (on lavapipe that alone cost a third of the lighting pass).
-fn face_matrix(light: Light, face: u32) -> mat4x4<f32> {
-    switch face {
-        case 1u: { return light.view_proj[1]; }
-        case 2u: { return light.view_proj[2]; }
-        case 3u: { return light.view_proj[3]; }
-        case 4u: { return light.view_proj[4]; }
-        case 5u: { return light.view_proj[5]; }
-        default: { return light.view_proj[0]; }
-    }
-}
-
-struct ShadowCoord {
-    uv: vec2<f32>,   // in the light's own map, 0..1
-    layer: i32,
-    face: u32,       // the point light's cube face (0 for other lights)
-    inside: bool,
-};
-
-fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
-    var sc: ShadowCoord;
-    sc.inside = false;
-    sc.layer = -1;
-    sc.face = 0u;
-    sc.uv = vec2<f32>(0.0);
-    if (light.first_layer < 0.0) {
-        return sc;
-    }
-    var face = 0u;
-    if (light.kind == KIND_POINT) {
-        face = cube_face(p - light.position);
-    }
-    let clip = face_matrix(light, face) * vec4<f32>(p, 1.0);
-    if (clip.w <= 0.0) {
-        return sc;
-    }
-    let ndc = clip.xyz / clip.w;
-    sc.uv = ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
-    sc.layer = i32(light.first_layer) + i32(face);
-    sc.face = face;
-    sc.inside = all(sc.uv >= vec2<f32>(0.0)) && all(sc.uv <= vec2<f32>(1.0));
-    return sc;
-}
-
-// The comparison results of the 2x2 texels around the texel corner `uv`.
-fn shadow_gather(uv: vec2<f32>, layer: i32, reference: f32) -> vec4<f32> {
-    return textureGatherCompare(shadow_depth, shadow_compare, uv, layer, reference);
-}
-
-fn gather_weights(wx: vec2<f32>, wy: vec2<f32>) -> vec4<f32> {
-    return vec4<f32>(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x);
-}
-
-// Percentage-closer filtering over a 3x3 texel area with bilinear weights: a tent of 4x4
-// texels, weights (1 - f, 1, 1, f) per axis. The comparison sampler's gather tests a 2x2 block
-// of texels in one fetch, so four fetches do what sixteen loads and compares did, with the
-// same weights. The receiver's depth is its projected depth after moving it shadow_bias toward
-// the light, which along its ray is the same test as distance - bias <= occluder distance.
-fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
-    let sc = shadow_coord(light, p);
-    if (!sc.inside) {
-        return 1.0;
-    }
-    let to_light = light_direction(light.kind, light.position, light.direction, p);
-    let biased = face_matrix(light, sc.face) * vec4<f32>(p + to_light * light.shadow_bias, 1.0);
-    // Beyond the far plane nothing was drawn (cleared to 1): lit, as before.
-    let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
-    let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
-    let t = sc.uv * size - vec2<f32>(0.5);
-    let base = floor(t) - vec2<f32>(1.0);
-    let f = t - floor(t);
-    // Weights of the four texels a gather returns: x = (left, bottom), y = (right, bottom),
-    // z = (right, top), w = (left, top).
-    let wx0 = vec2<f32>(1.0 - f.x, 1.0);
-    let wx1 = vec2<f32>(1.0, f.x);
-    let wy0 = vec2<f32>(1.0 - f.y, 1.0);
-    let wy1 = vec2<f32>(1.0, f.y);
-    // Written out rather than looped over arrays: a run-time index into a local array costs
-    // per-pixel scratch memory on some compilers.
-    let corner = (base + vec2<f32>(1.0)) * light.atlas_texel;
-    let step = 2.0 * light.atlas_texel;
-    var lit = dot(shadow_gather(corner, sc.layer, reference), gather_weights(wx0, wy0));
-    lit += dot(shadow_gather(corner + vec2<f32>(step, 0.0), sc.layer, reference), gather_weights(wx1, wy0));
-    lit += dot(shadow_gather(corner + vec2<f32>(0.0, step), sc.layer, reference), gather_weights(wx0, wy1));
-    lit += dot(shadow_gather(corner + vec2<f32>(step, step), sc.layer, reference), gather_weights(wx1, wy1));
-    return lit / 9.0;
-}
 
 // Beckmann distribution (d'Eon and Luebke 2007, Kelemen/Szirmay-Kalos skin specular).
 fn beckmann(ndoth: f32, m: f32) -> f32 {
@@ -219,35 +114,6 @@ struct Shading {
     tsm: vec3<f32>,         // translucent shadow maps: T(s) x blurred back-side irradiance
     specular: vec3<f32>,
 };
-
-// The light's visibility for the diffusion seen at p, per channel. Light entering at an angle
-// refracts, and the diffusion source it feeds lies 1 / sigma_t' along the refracted ray
-// (Jensen et al. 2001's real source), so the source under p was lit where the refracted ray
-// entered: tan(theta_t) / sigma_t' back toward the light, per channel. Red's entry point is
-// looked up first; where it sees the same shadow as p itself (everywhere but near shadow
-// edges), green and blue, whose sources lie between, see it too.
-fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, shadow: f32) -> vec3<f32> {
-    let cos_i = dot(n_vertex, l);
-    let scatters = lights.scattering != 0u && object.sss_strength > 0.0;
-    if (!scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
-        return vec3<f32>(shadow);
-    }
-    let sin_t = sqrt(max(1.0 - cos_i * cos_i, 0.0)) / object.eta;
-    let tan_t = sin_t / sqrt(max(1.0 - sin_t * sin_t, 1e-6));
-    let along = l - n_vertex * cos_i; // toward the light, in the tangent plane
-    let len = length(along);
-    if (len < 1e-6 || tan_t < 1e-4) {
-        return vec3<f32>(shadow);
-    }
-    let step = along / len * (tan_t * object.world_per_mm);
-    let red = shadow_factor(light, p + step / object.extinction.x);
-    if (red == shadow) {
-        return vec3<f32>(shadow);
-    }
-    let green = shadow_factor(light, p + step / object.extinction.y);
-    let blue = shadow_factor(light, p + step / object.extinction.z);
-    return vec3<f32>(red, green, blue);
-}
 
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.

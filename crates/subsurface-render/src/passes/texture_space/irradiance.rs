@@ -3,9 +3,10 @@
 //! irradiance map ([`MAP_FORMAT`], alpha = covered) and a stretch map ([`STRETCH_FORMAT`]:
 //! profile millimetres per texel along u and v, from the derivatives of the world position).
 //!
-//! The shader is the lighting pass's (common.wgsl, lighting.wgsl, transmittance.wgsl) with
-//! irradiance.wgsl appended, and the pipeline takes the lighting pass's three bind groups:
-//! its frame bind group (group 0), the object's (group 1) and the object's maps (group 2).
+//! The shader is the lighting pass's (common.wgsl, lighting.wgsl, shadow_lookup.wgsl,
+//! transmittance.wgsl) with irradiance.wgsl appended, and the pipeline takes the lighting
+//! pass's three bind groups: its frame bind group (group 0), the object's (group 1) and the
+//! object's maps (group 2).
 
 use crate::gpu_scene::{self, GpuObject};
 use crate::passes::lighting::{self, LightingPass};
@@ -16,6 +17,7 @@ use crate::timing::TimedPass;
 pub const SHADER: &str = concat!(
     include_str!("../common.wgsl"),
     include_str!("../lighting.wgsl"),
+    include_str!("../shadow_lookup.wgsl"),
     include_str!("../transmittance.wgsl"),
     include_str!("irradiance.wgsl")
 );
