@@ -130,7 +130,7 @@ struct Run {
     width: u32,
     height: u32,
     sss: &'static str,
-    /// How the screen-space passes fetched their texels (`packed`, `direct`).
+    /// How the screen-space passes fetched their texels (`packed`, `workgroup`, `direct`).
     fetch: &'static str,
     transmittance: String,
     /// Sum of the median per-pass GPU times (copy baseline excluded).

@@ -269,6 +269,23 @@ impl LightingPass {
         queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
     }
 
+    /// Draws every object with `pipeline` and the pass's groups (the depth pre-pass and the
+    /// lighting pass bind the same ones).
+    fn draw_objects(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+    ) {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
+        for (i, o) in objects.iter().enumerate() {
+            pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
+            o.draw(pass);
+        }
+    }
+
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -313,24 +330,16 @@ impl LightingPass {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("depth prepass"),
                 color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &targets.zbuffer,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: util::depth_attachment(
+                    &targets.zbuffer,
+                    wgpu::LoadOp::Clear(1.0),
+                    wgpu::StoreOp::Store,
+                ),
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.prepass);
-            pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            for (i, o) in objects.iter().enumerate() {
-                pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
-                o.draw(&mut pass);
-            }
+            self.draw_objects(&mut pass, &self.prepass, objects, maps);
         }
         timer.end(profiler, encoder);
         let timer = TimedPass::begin(profiler, "lighting", encoder);
@@ -351,24 +360,16 @@ impl LightingPass {
                     ),
                     attach(&sss, wgpu::Color::TRANSPARENT),
                 ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &targets.zbuffer,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: util::depth_attachment(
+                    &targets.zbuffer,
+                    wgpu::LoadOp::Load,
+                    wgpu::StoreOp::Discard,
+                ),
                 timestamp_writes: timer.writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            for (i, o) in objects.iter().enumerate() {
-                pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
-                o.draw(&mut pass);
-            }
+            self.draw_objects(&mut pass, &self.pipeline, objects, maps);
         }
         timer.end(profiler, encoder);
     }

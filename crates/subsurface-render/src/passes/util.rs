@@ -355,6 +355,20 @@ pub fn color_attachment(
     })
 }
 
+/// A [`depth_buffer`] attachment: `load` (cleared to the far plane, or kept from an earlier
+/// pass) and `store` (kept for a later pass, or discarded).
+pub fn depth_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+    store: wgpu::StoreOp,
+) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load, store }),
+        stencil_ops: None,
+    })
+}
+
 /// What differs between the passes that draw the objects once per shadow layer into that
 /// layer of an array atlas (the shadow maps and the translucent shadow maps).
 pub struct LayeredPassDesc<'a> {
@@ -395,8 +409,6 @@ pub struct LayeredPass {
     clear: wgpu::Color,
     pipeline: wgpu::RenderPipeline,
     layers: Vec<AtlasLayer>,
-    /// Whether the z-buffer is kept (`sampled_depth`).
-    store_depth: bool,
     /// `atlas_size` texels square, one layer per shadow layer (at least one).
     pub atlas: wgpu::Texture,
     /// All of `atlas` as a `texture_2d_array`.
@@ -460,7 +472,13 @@ impl LayeredPass {
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             )
         });
-        let shared_depth = depth_buffer(device, &depth_label, size, size);
+        // Without a kept z-buffer the layers share one, cleared for each.
+        let layer_depths: Vec<wgpu::TextureView> = match &kept_depth {
+            Some(kept) => (0..layers.len() as u32)
+                .map(|i| layer_view(kept, i))
+                .collect(),
+            None => vec![depth_buffer(device, &depth_label, size, size); layers.len()],
+        };
         let layers = layers
             .iter()
             .enumerate()
@@ -483,9 +501,7 @@ impl LayeredPass {
                     view_buffer,
                     bind_group,
                     target: layer_view(&atlas, i as u32),
-                    depth: kept_depth
-                        .as_ref()
-                        .map_or_else(|| shared_depth.clone(), |d| layer_view(d, i as u32)),
+                    depth: layer_depths[i].clone(),
                 }
             })
             .collect();
@@ -494,7 +510,6 @@ impl LayeredPass {
             clear: desc.clear,
             pipeline,
             layers,
-            store_depth: desc.sampled_depth,
             atlas_view: array_view(&atlas),
             atlas,
             depth_view: kept_depth.as_ref().map(array_view),
@@ -535,18 +550,15 @@ impl LayeredPass {
                         &layer.target,
                         wgpu::LoadOp::Clear(self.clear),
                     )],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &layer.depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: if self.store_depth {
-                                wgpu::StoreOp::Store
-                            } else {
-                                wgpu::StoreOp::Discard
-                            },
-                        }),
-                        stencil_ops: None,
-                    }),
+                    depth_stencil_attachment: depth_attachment(
+                        &layer.depth,
+                        wgpu::LoadOp::Clear(1.0),
+                        if self.depth_view.is_some() {
+                            wgpu::StoreOp::Store
+                        } else {
+                            wgpu::StoreOp::Discard
+                        },
+                    ),
                     timestamp_writes: timer.writes(),
                     occlusion_query_set: None,
                     multiview_mask: None,

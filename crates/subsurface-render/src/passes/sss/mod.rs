@@ -394,7 +394,8 @@ impl SssPass {
                 out_color,
             };
             Step {
-                key: key(stage, horizontal),
+                // Compute pipelines are looked up by stage alone.
+                key: key(stage, false),
                 bind_group: workgroup::bind_group(device, &parts().layout, &desc),
                 target: 0,
                 accum: false,
