@@ -2,7 +2,7 @@
 """Regenerates the committed references: every scenes/canonical/*.toml is exported with
 `subsurface export-mitsuba` and path-traced to references/NAME.exr.
 
-    python3 tools/reference/make_references.py [--spp 128] [--seed 0] [NAME ...]
+    python3 tools/reference/make_references.py [--spp 128] [--pass-spp 16] [--seed 0] [NAME ...]
 
 Run from the repository root after `cargo build --release -p subsurface-cli` (or set
 SUBSURFACE_BIN). Head scenes need ../shared/assets (the Lee Perry-Smith head); they are skipped
@@ -37,6 +37,8 @@ def main():
     p.add_argument("names", nargs="*", help="scene names (default: all of scenes/canonical)")
     p.add_argument("--spp", type=int, default=128)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--pass-spp", type=int, default=16,
+                   help="samples per pass (default 16); more per pass is faster, fewer gives a finer standard error")
     a = p.parse_args()
     scenes = sorted(glob.glob(os.path.join(ROOT, "scenes/canonical/*.toml")))
     names = a.names or [os.path.basename(s)[:-5] for s in scenes]
@@ -53,7 +55,8 @@ def main():
                 sys.exit(r.stderr.strip())
             out = os.path.join(ROOT, "references", name + ".exr")
             t = time.time()
-            rc = render_reference.main([os.path.join(tmp, "scene.xml"), "--out", out, "--spp", str(a.spp), "--seed", str(a.seed)])
+            rc = render_reference.main([os.path.join(tmp, "scene.xml"), "--out", out, "--spp", str(a.spp),
+                                         "--pass-spp", str(a.pass_spp), "--seed", str(a.seed)])
             if rc != 0:
                 sys.exit(rc)
             print(f"{name}: {time.time() - t:.0f} s")
