@@ -105,6 +105,18 @@ pub fn measure(
     }
 }
 
+impl ThicknessResult {
+    /// The significant bin of channel `c` with the largest |rel_error|: its thickness and its
+    /// signed error (the legend says which way and where, not only how far).
+    pub fn worst(&self, c: usize) -> Option<(f32, f32)> {
+        self.bins
+            .iter()
+            .filter(|b| b.significant[c])
+            .map(|b| (b.thickness_mm, b.rel_error[c]))
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+    }
+}
+
 /// Radiance against thickness on a log axis: real-time solid, reference dashed.
 pub fn draw(root: &plot::Area, t: &ThicknessResult, title: &str) -> plot::DrawResult {
     let x_max = t.bins.last().map_or(1.0, |b| f64::from(b.thickness_mm)) + 0.5;
@@ -136,10 +148,12 @@ pub fn draw(root: &plot::Area, t: &ThicknessResult, title: &str) -> plot::DrawRe
                 .map(|b| (f64::from(b.thickness_mm), f64::from(f(b)[c]).max(y_min)))
                 .collect()
         };
+        let worst = t.worst(c).map_or_else(String::new, |(mm, e)| {
+            format!(": worst {:+.0}% at {mm:.1} mm", 100.0 * e)
+        });
         let label = format!(
-            "{} real-time (reference dashed): worst {:+.0}%",
-            plot::CHANNEL_NAMES[c],
-            100.0 * t.max_abs_rel_error[c]
+            "{} real-time (reference dashed){worst}",
+            plot::CHANNEL_NAMES[c]
         );
         plot::line(&mut chart, pts(|b| b.realtime), color, label)?;
         plot::dashed(&mut chart, pts(|b| b.reference), color, (8, 5))?;
@@ -175,5 +189,9 @@ mod tests {
         // Green at 1.5 mm is 0.5 % of the thinnest bin: not significant; blue is zero.
         assert_eq!(t.bins[1].significant, [true, false, false]);
         assert_eq!(t.max_abs_rel_error, [0.5, 0.0, 0.0]);
+        // The legend's worst bin keeps its sign and says where it is.
+        assert_eq!(t.worst(0), Some((1.5, -0.5)));
+        assert_eq!(t.worst(1), Some((0.5, 0.0)));
+        assert_eq!(t.worst(2), Some((0.5, 0.0)));
     }
 }
