@@ -196,6 +196,59 @@ translation = [0.025, 0.025, 0.0]"#,
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--linear` writes the radiance that was compared: the RMSE recomputed from that EXR and the
+/// reference is the one reported.
+#[test]
+fn compare_writes_the_compared_linear_radiance() {
+    let dir = tempdir("linear");
+    if !gpu_available(&dir) {
+        return;
+    }
+    write_scene(
+        &dir,
+        r#"mesh = { shape = "sphere", radius = 0.02, segments = 16 }
+translation = [0.025, 0.025, 0.0]"#,
+    );
+    write_exr(&dir.join("grey.exr"), 32, 24, |x, y| 0.01 * (x + y) as f32);
+    let out = subsurface(
+        &[
+            "compare", "grey.exr", "s.toml", "--json", "--linear", "ours.exr",
+        ],
+        &dir,
+    );
+    assert_success(&out);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let ours = image::open(dir.join("ours.exr")).unwrap().to_rgb32f();
+    assert_eq!(ours.dimensions(), (32, 24));
+    let sq: f64 = ours
+        .enumerate_pixels()
+        .flat_map(|(x, y, p)| {
+            let want = 0.01 * (x + y) as f32;
+            p.0.map(|v| f64::from(v - want).powi(2))
+        })
+        .sum();
+    let rmse = (sq / (32.0 * 24.0 * 3.0)).sqrt();
+    let reported = r["rmse"].as_f64().unwrap();
+    assert!(rmse > 0.01, "a lit sphere differs from the ramp: {rmse}");
+    assert!(
+        (rmse - reported).abs() <= 1e-5 * reported,
+        "{rmse} vs {reported}"
+    );
+    // A bad destination fails before rendering, naming the flag's file.
+    let e = error_line(&subsurface(
+        &[
+            "compare",
+            "grey.exr",
+            "s.toml",
+            "--linear",
+            "no/such/dir/x.exr",
+        ],
+        &dir,
+    ));
+    assert!(e.contains("no/such/dir/x.exr"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The reference is read before anything else, so no GPU is needed to reject it.
 #[test]
 fn compare_rejects_a_reference_with_nan_or_inf_pixels() {

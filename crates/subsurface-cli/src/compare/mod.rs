@@ -39,6 +39,11 @@ pub struct CompareArgs {
     /// real-time and reference per channel, as a PNG (`-`: standard output).
     #[arg(long, value_name = "FILE.png")]
     pub plot: Option<PathBuf>,
+    /// Also write the real-time linear radiance that was compared (diffuse after SSS plus
+    /// specular, the reference's units, before exposure and tone mapping) as an RGB float EXR,
+    /// for analysis beside the reference.
+    #[arg(long, value_name = "FILE.exr")]
+    pub linear: Option<PathBuf>,
     /// Print the results as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -306,7 +311,17 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         !(is_stdout(&args.out) && args.plot.as_deref().is_some_and(is_stdout)),
         "--plot: --out is standard output already"
     );
+    anyhow::ensure!(
+        !args.linear.as_deref().is_some_and(is_stdout)
+            || !(is_stdout(&args.out) || args.plot.as_deref().is_some_and(is_stdout)),
+        "--linear: standard output is taken by another output already"
+    );
     let plot_file = args.plot.as_deref().map(plot::create_plot).transpose()?;
+    let linear_file = args
+        .linear
+        .as_deref()
+        .map(PendingFile::create)
+        .transpose()?;
     let pending = PendingFile::create(&args.out)?;
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene, opts.clone())?;
@@ -438,6 +453,15 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         }
     }
     pending.write_png(&side)?;
+    if let Some(mut file) = linear_file {
+        let img = image::Rgb32FImage::from_raw(w, h, ours.iter().flatten().copied().collect())
+            .expect("w * h pixels");
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut bytes, image::ImageFormat::OpenExr)
+            .context("--linear: EXR encoding failed")?;
+        file.write_bytes(bytes.get_ref())?;
+        file.commit()?;
+    }
     if let Some(file) = plot_file {
         let title = format!(
             "{}: {} + {}",
