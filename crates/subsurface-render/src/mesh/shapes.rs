@@ -1,4 +1,4 @@
-//! Procedural test shapes (slab, wedge, sphere) and the UV atlas that gives each of
+//! Procedural test shapes (slab, wedge, sphere, cylinder) and the UV atlas that gives each of
 //! their faces its own chart.
 
 use glam::Vec3;
@@ -191,6 +191,60 @@ impl Mesh {
         mesh.generate_tangents();
         mesh
     }
+
+    /// Closed cylinder centred at the origin, its axis along y: `segments` divisions around
+    /// the side (smooth normals), flat caps. Backlit across its axis it is a finger whose
+    /// cross-section is the same at every height, so a reference can be averaged along it.
+    /// The side is chart 0 of the atlas (u around, v along), the caps charts 1 and 2.
+    pub fn cylinder(radius: f32, length: f32, segments: u32) -> Mesh {
+        let seg = segments.max(3);
+        let half = 0.5 * length;
+        let mut mesh = Mesh::default();
+        let around = |s: u32| {
+            let phi = s as f32 / seg as f32 * std::f32::consts::TAU;
+            Vec3::new(phi.sin(), 0.0, phi.cos())
+        };
+        for s in 0..=seg {
+            let n = around(s);
+            for (v, y) in [(0.0, -half), (1.0, half)] {
+                mesh.vertices.push(Vertex {
+                    position: (n * radius + Vec3::Y * y).to_array(),
+                    normal: n.to_array(),
+                    uv: Self::atlas_uv(0, [s as f32 / seg as f32, v]),
+                    tangent: [0.0; 4],
+                });
+            }
+        }
+        for s in 0..seg {
+            let (a, b) = (2 * s, 2 * s + 2);
+            // counter-clockwise seen from outside
+            mesh.indices
+                .extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+        }
+        for (chart, y, ny) in [(1, -half, -1.0f32), (2, half, 1.0)] {
+            let centre = mesh.vertices.len() as u32;
+            let cap = |p: Vec3| Vertex {
+                position: (p * radius + Vec3::Y * y).to_array(),
+                normal: [0.0, ny, 0.0],
+                uv: Self::atlas_uv(chart, [0.5 + 0.5 * p.x, 0.5 + 0.5 * p.z]),
+                tangent: [0.0; 4],
+            };
+            mesh.vertices.push(cap(Vec3::ZERO));
+            for s in 0..seg {
+                mesh.vertices.push(cap(around(s)));
+            }
+            for s in 0..seg {
+                let (i, j) = (centre + 1 + s, centre + 1 + (s + 1) % seg);
+                if ny > 0.0 {
+                    mesh.indices.extend_from_slice(&[centre, i, j]);
+                } else {
+                    mesh.indices.extend_from_slice(&[centre, j, i]);
+                }
+            }
+        }
+        mesh.generate_tangents();
+        mesh
+    }
 }
 
 #[cfg(test)]
@@ -250,6 +304,32 @@ mod tests {
                 assert_eq!(v.position[2], 0.0);
             }
         }
+    }
+
+    #[test]
+    fn cylinder_shape() {
+        let m = Mesh::cylinder(0.5, 3.0, 64);
+        check_mesh(&m);
+        let (lo, hi) = m.bounds();
+        assert!((lo - Vec3::new(-0.5, -1.5, -0.5)).abs().max_element() < 1e-6);
+        assert!((hi - Vec3::new(0.5, 1.5, 0.5)).abs().max_element() < 1e-6);
+        // The inscribed 64-gon prism: pi r^2 L sin(2 pi / 64) / (2 pi / 64).
+        let exact = std::f32::consts::PI * 0.25 * 3.0;
+        let polygon = exact * (std::f32::consts::TAU / 64.0).sin() / (std::f32::consts::TAU / 64.0);
+        assert!(
+            (volume(&m) - polygon).abs() < 1e-4 * exact,
+            "{}",
+            volume(&m)
+        );
+        // Side normals point away from the axis.
+        for v in &m.vertices {
+            let p = Vec3::from(v.position);
+            let n = Vec3::from(v.normal);
+            if n.y == 0.0 {
+                assert!((n - Vec3::new(p.x, 0.0, p.z) / 0.5).length() < 1e-5);
+            }
+        }
+        check_mesh(&Mesh::cylinder(1.0, 1.0, 3));
     }
 
     #[test]

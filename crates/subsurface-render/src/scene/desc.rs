@@ -173,7 +173,9 @@ impl ObjectDesc {
 /// `mesh = { gltf = "hand.glb" }`,
 /// `mesh = { shape = "slab", width = 0.1, height = 0.1, thickness = 0.01 }`,
 /// `mesh = { shape = "wedge", length = 0.1, height = 0.05, max_thickness = 0.02 }`,
-/// `mesh = { shape = "sphere", radius = 0.05, segments = 64 }` (segments optional).
+/// `mesh = { shape = "sphere", radius = 0.05, segments = 64 }` (segments optional),
+/// `mesh = { shape = "cylinder", radius = 0.007, length = 0.12, segments = 64 }` (segments
+/// optional).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "MeshDescToml", into = "MeshDescToml")]
 pub enum MeshDesc {
@@ -193,6 +195,12 @@ pub enum MeshDesc {
     },
     Sphere {
         radius: f32,
+        segments: u32,
+    },
+    /// Closed cylinder along y: a finger's cross-section, the same at every height.
+    Cylinder {
+        radius: f32,
+        length: f32,
         segments: u32,
     },
 }
@@ -223,6 +231,7 @@ enum ShapeKind {
     Slab,
     Wedge,
     Sphere,
+    Cylinder,
 }
 
 /// Flat TOML form of [`MeshDesc`].
@@ -285,7 +294,7 @@ impl TryFrom<MeshDescToml> for MeshDesc {
         match (t.gltf, t.shape) {
             (Some(_), Some(_)) => Err("give either `gltf` or `shape`, not both".into()),
             (None, None) => {
-                Err("needs `gltf = \"path\"` or `shape = \"slab\" | \"wedge\" | \"sphere\"`".into())
+                Err("needs `gltf = \"path\"` or `shape = \"slab\" | \"wedge\" | \"sphere\" | \"cylinder\"`".into())
             }
             (Some(path), None) => {
                 only(&[], "a glTF mesh")?;
@@ -311,6 +320,14 @@ impl TryFrom<MeshDescToml> for MeshDesc {
                 only(&["radius", "segments"], "shape \"sphere\"")?;
                 Ok(MeshDesc::Sphere {
                     radius: need(t.radius, "radius", "sphere")?,
+                    segments: t.segments.unwrap_or(DEFAULT_SPHERE_SEGMENTS),
+                })
+            }
+            (None, Some(ShapeKind::Cylinder)) => {
+                only(&["radius", "length", "segments"], "shape \"cylinder\"")?;
+                Ok(MeshDesc::Cylinder {
+                    radius: need(t.radius, "radius", "cylinder")?,
+                    length: need(t.length, "length", "cylinder")?,
                     segments: t.segments.unwrap_or(DEFAULT_SPHERE_SEGMENTS),
                 })
             }
@@ -350,6 +367,17 @@ impl From<MeshDesc> for MeshDescToml {
             MeshDesc::Sphere { radius, segments } => MeshDescToml {
                 shape: Some(ShapeKind::Sphere),
                 radius: Some(radius),
+                segments: Some(segments),
+                ..Default::default()
+            },
+            MeshDesc::Cylinder {
+                radius,
+                length,
+                segments,
+            } => MeshDescToml {
+                shape: Some(ShapeKind::Cylinder),
+                radius: Some(radius),
+                length: Some(length),
                 segments: Some(segments),
                 ..Default::default()
             },

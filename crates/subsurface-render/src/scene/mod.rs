@@ -130,6 +130,11 @@ fn load_object(
             max_thickness,
         } => Mesh::wedge(*length, *height, *max_thickness),
         MeshDesc::Sphere { radius, segments } => Mesh::sphere(*radius, *segments),
+        MeshDesc::Cylinder {
+            radius,
+            length,
+            segments,
+        } => Mesh::cylinder(*radius, *length, *segments),
     };
     let tex = |field: &str, p: &Option<String>| -> Result<Option<image::RgbaImage>, SceneError> {
         p.as_ref()

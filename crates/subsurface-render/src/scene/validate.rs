@@ -219,7 +219,7 @@ impl SceneDesc {
             for (name, size) in o.mesh.sizes() {
                 c.positive(&f(&format!("mesh.{name}")), size)?;
             }
-            if let MeshDesc::Sphere { segments, .. } = o.mesh
+            if let MeshDesc::Sphere { segments, .. } | MeshDesc::Cylinder { segments, .. } = o.mesh
                 && !(3..=1024).contains(&segments)
             {
                 return Err(c.err(
