@@ -16,6 +16,17 @@ Beside it, OUT.stderr.exr holds each pixel's standard error: the spread of the p
 divided by sqrt(number of passes). A path-traced reference is never noise-free; with this the
 comparison can tell its noise from a real difference (`subsurface compare` subtracts the noise
 floor from the squared error and gives region means with their uncertainty).
+
+A medium whose coefficients differ between channels (every skin) is rendered one channel at a
+time (`--per-channel`, the default): three renders, each with every medium grey at one
+channel's coefficients, each keeping its own channel. With a chromatic medium, `volpath` samples
+every free flight for all three channels at once and weights each channel by the ratio of its
+transmittance to the sampling density; over the hundreds of scattering events that light takes
+through a thick backlit part, those weights multiply into a heavy-tailed estimator whose sample
+mean falls short of its expectation for any sample count one can afford, and whose spread
+underestimates its own error. Measured on a 10 mm slab of skin1 lit from behind: red 0.72 to
+0.80 (standard errors 3-4 %, 8192 and 32768 samples) rendered chromatic, 0.952 (0.8 %, 8192
+samples) rendered grey, where exact slab transport (adding-doubling) predicts 0.91 to 1.02.
 """
 
 import argparse
@@ -38,6 +49,8 @@ def parse_args(argv):
     p.add_argument("--variant", default="auto",
                    help="Mitsuba variant: auto (llvm_ad_rgb when libLLVM is found, else scalar_rgb), "
                         "scalar_rgb, llvm_ad_rgb, cuda_ad_rgb")
+    p.add_argument("--per-channel", dest="per_channel", action=argparse.BooleanOptionalAction, default=True,
+                   help="render chromatic media one channel at a time, each grey (default; see above)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     a = p.parse_args(argv)
     for k in ("spp", "pass_spp"):
@@ -70,9 +83,35 @@ def stderr_path(out):
     return base + ".stderr.exr"
 
 
+def channel_values(color):
+    """The three floats of a Color3f parameter, scalar or JIT (a JIT array of one lane)."""
+    import drjit as dr
+
+    return [float(dr.slice(color[j]) if dr.is_jit_v(color) else color[j]) for j in range(3)]
+
+
+def chromatic_media(mi, params):
+    """The homogeneous media of the scene whose albedo or extinction differs between channels:
+    (albedo key, sigma_t key, albedo, sigma_t) each."""
+    media = []
+    for key in params.keys():
+        if not key.endswith(".albedo.value.value"):
+            continue
+        base = key[: -len("albedo.value.value")]
+        sigma_key = base + "sigma_t.value.value"
+        if sigma_key not in params.keys():
+            continue
+        albedo = channel_values(params[key])
+        sigma_t = channel_values(params[sigma_key])
+        if len(set(albedo)) > 1 or len(set(sigma_t)) > 1:
+            media.append((key, sigma_key, albedo, sigma_t))
+    return media
+
+
 def render(a):
     """Returns (mean image, standard-error image, seconds). Raises on any Mitsuba error."""
     import mitsuba as mi
+    import drjit as dr
 
     mi.set_variant(a.variant)
     params = {}
@@ -83,40 +122,63 @@ def render(a):
     if a.max_depth:
         params["max_depth"] = a.max_depth
     scene = mi.load_file(a.scene, **params)
+    scene_params = mi.traverse(scene)
+    media = chromatic_media(mi, scene_params) if a.per_channel else []
+    # One render per channel with every medium grey at that channel's coefficients (see the
+    # module's notes), or one render as the scene is.
+    channels = [0, 1, 2] if media else [None]
     passes = -(-a.spp // a.pass_spp)
-    acc = None
-    acc2 = None
-    done = 0
+    total = a.spp * len(channels)
+    mean = None
+    stderr = None
+    done_all = 0
     start = time.time()
-    for i in range(passes):
-        n = min(a.pass_spp, a.spp - done)
-        # Distinct, deterministic seeds per pass: the sum is one render of a.spp samples.
-        img = mi.render(scene, spp=n, seed=a.seed * 1000003 + i)
-        # Plain Dr.Jit tensors (no numpy needed). Equal passes: the mean of the passes is the
-        # render of a.spp samples, and their spread estimates its noise.
-        acc = img if acc is None else acc + img
-        acc2 = img * img if acc2 is None else acc2 + img * img
-        done += n
-        if not a.quiet:
-            el = time.time() - start
-            eta = el / done * (a.spp - done)
-            print(
-                f"\r{os.path.basename(a.out)}: {done}/{a.spp} spp, {el:.0f} s, about {eta:.0f} s left ",
-                end="",
-                file=sys.stderr,
-                flush=True,
-            )
+    for c in channels:
+        if c is not None:
+            for albedo_key, sigma_key, albedo, sigma_t in media:
+                scene_params[albedo_key] = mi.Color3f(albedo[c])
+                scene_params[sigma_key] = mi.Color3f(sigma_t[c])
+            scene_params.update()
+        acc = None
+        acc2 = None
+        done = 0
+        for i in range(passes):
+            n = min(a.pass_spp, a.spp - done)
+            # Distinct, deterministic seeds per pass: the sum is one render of a.spp samples.
+            img = mi.render(scene, spp=n, seed=a.seed * 1000003 + i)
+            # Plain Dr.Jit tensors (no numpy needed). Equal passes: the mean of the passes is
+            # the render of a.spp samples, and their spread estimates its noise.
+            acc = img if acc is None else acc + img
+            acc2 = img * img if acc2 is None else acc2 + img * img
+            done += n
+            done_all += n
+            if not a.quiet:
+                el = time.time() - start
+                eta = el / done_all * (total - done_all)
+                what = "" if c is None else f" ({'RGB'[c]})"
+                print(
+                    f"\r{os.path.basename(a.out)}{what}: {done}/{a.spp} spp, {el:.0f} s, about {eta:.0f} s left ",
+                    end="",
+                    file=sys.stderr,
+                    flush=True,
+                )
+        k = passes
+        m = acc / k
+        if k > 1:
+            var_pass = dr.maximum(acc2 / k - m * m, 0.0) * (k / (k - 1))
+            se = dr.sqrt(var_pass / k)
+        else:
+            se = m * 0.0
+        if c is not None:
+            # Keep channel c of this render: multiply by a 0/1 mask (plain tensors, no numpy).
+            h, w = m.shape[0], m.shape[1]
+            mask = mi.TensorXf([1.0 if j == c else 0.0 for j in range(3)] * (h * w), shape=(h, w, 3))
+            m = m * mask
+            se = se * mask
+        mean = m if mean is None else mean + m
+        stderr = se if stderr is None else stderr + se
     if not a.quiet:
         print(file=sys.stderr)
-    import drjit as dr
-
-    k = passes
-    mean = acc / k
-    if k > 1:
-        var_pass = dr.maximum(acc2 / k - mean * mean, 0.0) * (k / (k - 1))
-        stderr = dr.sqrt(var_pass / k)
-    else:
-        stderr = mean * 0.0
     return mean, stderr, time.time() - start
 
 
