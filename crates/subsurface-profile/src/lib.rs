@@ -26,6 +26,7 @@ mod materials;
 mod medium;
 pub mod oracle;
 mod slab;
+mod transport;
 
 pub use dipole::{DiffusionChannel, Dipole, Multipole, fresnel_diffuse_reflectance};
 pub use error::{ProfileError, Result};
@@ -43,3 +44,4 @@ pub use materials::{
 };
 pub use medium::{Coefficients, Medium};
 pub use slab::{SlabTransmittance, slab_radiance};
+pub use transport::{SlabResult, SlabSolver, TransportTable, fresnel_inside, slab_transport};
