@@ -7,15 +7,15 @@
 //! render per channel, see tools/reference/render_reference.py), because exact transport decays
 //! as `exp(-kappa sigma_t' s)` with `kappa` the root of `(alpha' / 2 kappa) ln((1 + kappa) /
 //! (1 - kappa)) = 1`, slower than diffusion's `sigma_tr`. This module solves the radiative
-//! transfer equation of the same medium the path tracer renders (extinction `sigma_t' = sigma_a
-//! + sigma_s'`, isotropic phase function, smooth Fresnel boundaries of index `eta` on both
-//! faces, collimated light at normal incidence) to quadrature accuracy:
+//! transfer equation of the same medium the path tracer renders (extinction `sigma_t'`, the sum
+//! of `sigma_a` and `sigma_s'`, isotropic phase function, smooth Fresnel boundaries of index
+//! `eta` on both faces, collimated light at normal incidence) to quadrature accuracy:
 //!
 //! * directions inside the slab are Gauss-Legendre nodes in `mu = cos(theta)`, split at the
 //!   critical angle so the total internal reflection's kink falls between nodes;
 //! * a layer is its reflection and transmission operators on radiance vectors (`R`, `T`) and
-//!   its responses to the collimated beam (`r`, `t`); a layer of optical thickness `delta` this
-//!   thin is single scattering, `R = T - exp(-delta / mu) = a delta w_j / (2 mu_i)`;
+//!   its responses to the collimated beam (`r`, `t`); a layer thin enough (`delta` optical
+//!   depths) scatters light at most once, in closed form;
 //! * two layers add as `T12 = T2 (I - R1 R2)^-1 T1`, `R12 = R1 + T1 (I - R2 R1)^-1 R2 T1`
 //!   (homogeneous layers look the same from either side), so doubling reaches any thickness
 //!   in a few dozen steps and adding a thin layer steps through a table of thicknesses;
