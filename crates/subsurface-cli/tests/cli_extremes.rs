@@ -249,6 +249,92 @@ translation = [0.025, 0.025, 0.0]"#,
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--supersample N` renders N x N samples per pixel and box-filters them like the path
+/// tracer's film: inside the sphere every pixel keeps its value (a smooth surface), while the
+/// silhouette's pixels take the share of their area that is skin. (No specular: a highlight
+/// is as sharp as the pixels that sample it.)
+#[test]
+fn compare_supersamples_like_a_box_filter() {
+    let dir = tempdir("supersample");
+    if !gpu_available(&dir) {
+        return;
+    }
+    write_scene(
+        &dir,
+        r#"mesh = { shape = "sphere", radius = 0.02, segments = 64 }
+translation = [0.025, 0.025, 0.0]
+[objects.material]
+specular = 0.0"#,
+    );
+    write_exr(&dir.join("grey.exr"), 32, 24, |_, _| 0.1);
+    let linear = |ss: &str, name: &str| {
+        assert_success(&subsurface(
+            &[
+                "compare",
+                "grey.exr",
+                "s.toml",
+                "--supersample",
+                ss,
+                "--linear",
+                name,
+            ],
+            &dir,
+        ));
+        image::open(dir.join(name)).unwrap().to_rgb32f()
+    };
+    let one = linear("1", "one.exr");
+    let four = linear("4", "four.exr");
+    let lum = |p: &image::Rgb<f32>| p.0.iter().sum::<f32>();
+    let (mut inside, mut edge) = (0, 0);
+    let (mut sum_one, mut sum_four) = (0.0, 0.0);
+    for y in 1..23i32 {
+        for x in 1..31i32 {
+            let around = (-1..=1)
+                .flat_map(|j| (-1..=1).map(move |i| (x + i, y + j)))
+                .all(|(i, j)| lum(one.get_pixel(i as u32, j as u32)) > 1.0);
+            let (x, y) = (x as u32, y as u32);
+            let (a, b) = (lum(one.get_pixel(x, y)), lum(four.get_pixel(x, y)));
+            if around {
+                // Shading varies smoothly inside: the box mean is near the centre's value (the
+                // sphere is ten pixels across, so a pixel spans some shading).
+                assert!((b / a - 1.0).abs() < 0.2, "({x}, {y}): {b} vs {a}");
+                sum_one += a;
+                sum_four += b;
+                inside += 1;
+            } else if a < 0.1 && b > 0.1 {
+                // Just outside the sphere's outline (the background is about 0.06) a pixel
+                // still holds some skin.
+                edge += 1;
+            }
+        }
+    }
+    assert!(inside > 25 && edge > 4, "{inside} inside, {edge} edge");
+    assert!(
+        (sum_four / sum_one - 1.0).abs() < 0.03,
+        "{sum_four} vs {sum_one}"
+    );
+    for bad in ["0", "9"] {
+        let e = error_line(&subsurface(
+            &[
+                "compare",
+                "grey.exr",
+                "s.toml",
+                "--supersample",
+                bad,
+                "-o",
+                "c.png",
+            ],
+            &dir,
+        ));
+        assert!(
+            e.starts_with("error: --supersample: must be in 1..=8"),
+            "{e}"
+        );
+        assert!(!dir.join("c.png").exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The reference is read before anything else, so no GPU is needed to reject it.
 #[test]
 fn compare_rejects_a_reference_with_nan_or_inf_pixels() {

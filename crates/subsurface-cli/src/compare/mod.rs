@@ -44,6 +44,13 @@ pub struct CompareArgs {
     /// for analysis beside the reference.
     #[arg(long, value_name = "FILE.exr")]
     pub linear: Option<PathBuf>,
+    /// Render N x N samples per reference pixel (at N times the size) and average them, as
+    /// the path tracer's box filter averages each pixel's area: a silhouette's thin rim, where
+    /// light crosses a fraction of a millimetre of skin, is far brighter than the pixel
+    /// centre that one sample shades, so at one sample the comparison measures the sampling
+    /// as much as the method. 1..=8.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub supersample: u32,
     /// Print the results as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -296,6 +303,11 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     let mut scene = load_scene(args.scene.as_ref(), None)?;
     args.settings.apply(&mut scene)?;
     let opts = RenderOptions::from_scene(&scene);
+    let ss = args.supersample;
+    anyhow::ensure!(
+        (1..=8).contains(&ss),
+        "--supersample: must be in 1..=8 (got {ss})"
+    );
     anyhow::ensure!(
         (rw, rh) == (opts.width(), opts.height()),
         "{}: the reference is {rw}x{rh} but the scene renders {}x{}",
@@ -324,17 +336,40 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .transpose()?;
     let pending = PendingFile::create(&args.out)?;
     let ctx = GpuContext::new_headless()?;
-    let mut renderer = Renderer::new(&ctx, &scene, opts.clone())?;
+    let (w, h) = (opts.width(), opts.height());
+    let mut fine = opts.clone();
+    fine.settings.width = w * ss;
+    fine.settings.height = h * ss;
+    ctx.check_size("--supersample: the render ", fine.width(), fine.height())?;
+    let mut renderer = Renderer::new(&ctx, &scene, fine.clone())?;
     let frame = renderer.render().context("rendering failed")?;
     let diffuse = renderer.read_diffuse()?;
     let specular = renderer.read_specular()?;
     let mask = renderer.read_sss()?;
-    let ours: Vec<[f32; 3]> = diffuse
+    let ours_fine: Vec<[f32; 3]> = diffuse
         .iter()
         .zip(&specular)
         .map(|(d, s)| [d[0] + s[0], d[1] + s[1], d[2] + s[2]])
         .collect();
-    let (w, h) = (opts.width(), opts.height());
+    // The CPU tone map must reproduce the GPU frame (at the size it was rendered).
+    let check = tone_map(
+        &ours_fine,
+        opts.settings.exposure_ev,
+        fine.width(),
+        fine.height(),
+    )
+    .pixels()
+    .zip(frame.image.pixels())
+    .flat_map(|(a, b)| (0..3).map(move |c| a.0[c].abs_diff(b.0[c])))
+    .max()
+    .unwrap_or(0);
+    let ours = box_down(&ours_fine, w, h, ss);
+    // A pixel is skin where most of its samples are (the SSS target's r is the strength).
+    let skin: Vec<[f32; 3]> = mask
+        .iter()
+        .map(|m| [f32::from(u8::from(m[0] > 0.0)); 3])
+        .collect();
+    let skin = box_down(&skin, w, h, ss);
     let n = (w * h) as usize;
 
     // RMSE of linear radiance.
@@ -362,7 +397,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     let relative = |v: f64| (ref_mean > 0.0).then(|| (v / ref_mean) as f32);
 
     // Region means, always starting with all skin pixels.
-    let is_skin = |i: usize| mask[i][0] > 0.0;
+    let is_skin = |i: usize| skin[i][0] > 0.5;
     let mut all = vec![Region {
         name: "skin".into(),
         rect: [0.0, 0.0, 1.0, 1.0],
@@ -419,13 +454,28 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         Some(spec) => {
             // The thickness each pixel's light crosses, from the same shadow maps: the
             // thickness debug view writes it into the diffuse target (< 0: unknown).
-            let mut o = opts.clone();
+            let mut o = fine.clone();
             o.view = subsurface_render::DebugView::Thickness;
             renderer.update(&scene, &o)?;
             renderer
                 .render()
                 .context("rendering the thickness view failed")?;
-            let s: Vec<f32> = renderer.read_diffuse()?.iter().map(|v| v[0]).collect();
+            // A pixel's thickness is its samples' mean, over those where it is known.
+            let fine_s = renderer.read_diffuse()?;
+            let known: Vec<[f32; 3]> = fine_s
+                .iter()
+                .map(|v| {
+                    if v[0] >= 0.0 {
+                        [v[0], 1.0, 0.0]
+                    } else {
+                        [0.0; 3]
+                    }
+                })
+                .collect();
+            let s: Vec<f32> = box_down(&known, w, h, ss)
+                .iter()
+                .map(|v| if v[1] > 0.0 { v[0] / v[1] } else { -1.0 })
+                .collect();
             Some(thickness::measure(&ours, &reference, &s, w, h, &spec))
         }
         None => None,
@@ -434,12 +484,6 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     // FLIP on the tone-mapped images.
     let ours_ldr = tone_map(&ours, opts.settings.exposure_ev, w, h);
     let ref_ldr = tone_map(&reference, opts.settings.exposure_ev, w, h);
-    let check = ours_ldr
-        .pixels()
-        .zip(frame.image.pixels())
-        .flat_map(|(a, b)| (0..3).map(move |c| a.0[c].abs_diff(b.0[c])))
-        .max()
-        .unwrap_or(0);
     let err = flip::flip(&ref_ldr, &ours_ldr);
     let flip_mean = err.iter().map(|v| f64::from(*v)).sum::<f64>() / n as f64;
 
@@ -506,6 +550,25 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         tonemap_check_max_diff: check,
         out: args.out.display().to_string(),
     })
+}
+
+/// The mean of each `ss` x `ss` block of a `(w ss) x (h ss)` image: a box filter, as the path
+/// tracer's film applies to every pixel.
+fn box_down(fine: &[[f32; 3]], w: u32, h: u32, ss: u32) -> Vec<[f32; 3]> {
+    if ss == 1 {
+        return fine.to_vec();
+    }
+    let fw = (w * ss) as usize;
+    let k = 1.0 / (ss * ss) as f32;
+    let mut out = vec![[0.0f32; 3]; (w * h) as usize];
+    for (i, px) in fine.iter().enumerate() {
+        let (x, y) = ((i % fw) as u32 / ss, (i / fw) as u32 / ss);
+        let o = &mut out[(y * w + x) as usize];
+        for c in 0..3 {
+            o[c] += px[c] * k;
+        }
+    }
+    out
 }
 
 /// Millimetres of skin per pixel in the plane through the camera's target, square to the view:
