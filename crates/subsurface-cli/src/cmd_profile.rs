@@ -7,7 +7,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use plotters::prelude::*;
 use subsurface_profile::{
     DEFAULT_FALLOFF, DEFAULT_SAMPLES, DEFAULT_STRENGTH, GaussianFit, KernelParams, Material,
-    ProfileError, SumOfGaussians, material, separable_kernel, separable_kernel_for,
+    ProfileError, SlabSolver, SumOfGaussians, material, separable_kernel, separable_kernel_for,
     separable_kernel_projected, separable_range_for, separable_range_projected,
 };
 
@@ -247,7 +247,56 @@ fn describe_material(m: &Material) -> String {
         "total diffuse reflectance",
         rgb(m.total_reflectance())
     );
+    if let Some(t) = exact_transport(m) {
+        out +=
+            "exact transport (adding-doubling; what the renderer's colour and `diffusion` use):\n";
+        out += &format!("{:<28} {}\n", "  diffuse albedo", rgb(t.albedo));
+        if let Some(s) = t.slab {
+            // Thick slabs pass 1e-6 of blue: scientific notation.
+            let sci = |v: [f64; 3]| format!("{:>10.3e} {:>10.3e} {:>10.3e}", v[0], v[1], v[2]);
+            out += &format!("{:<28} {}\n", "  transmitted, scattered", sci(s[0]));
+            out += &format!("{:<28} {}\n", "  of which scattered once", sci(s[1]));
+            out += &format!("{:<28} {}\n", "  unscattered", sci(s[2]));
+        }
+    }
     out
+}
+
+/// Exact transport through the material's medium: its half-space's diffuse albedo and, for a
+/// slab, what crosses it (scattered, scattered once, unscattered). None for the Gaussian
+/// preset, which is no medium.
+#[derive(Debug, serde::Serialize)]
+struct ExactTransport {
+    albedo: [f64; 3],
+    /// [scattered, scattered once, unscattered] per channel.
+    slab: Option<[[f64; 3]; 3]>,
+}
+
+fn exact_transport(m: &Material) -> Option<ExactTransport> {
+    let (dipole, thickness) = match m {
+        Material::Gaussians { .. } => return None,
+        Material::Dipole { dipole, .. } => (*dipole, None),
+        Material::Multipole { multipole, .. } => (multipole.dipole, Some(multipole.thickness_mm)),
+    };
+    let solver = SlabSolver::new(dipole.eta).ok()?;
+    let ch = [0, 1, 2].map(|c| dipole.channel(c));
+    let albedo = ch.map(|c| {
+        solver
+            .diffuse_reflectance(c.sigma_t_prime, c.alpha_prime)
+            .unwrap_or(f64::NAN)
+    });
+    let slab = thickness.and_then(|s| {
+        let r: Vec<_> = ch
+            .iter()
+            .map(|c| solver.slab(c.sigma_t_prime, c.alpha_prime, s).ok())
+            .collect::<Option<_>>()?;
+        Some([
+            [0, 1, 2].map(|c| r[c].transmitted),
+            [0, 1, 2].map(|c| r[c].transmitted_once),
+            [0, 1, 2].map(|c| r[c].unscattered),
+        ])
+    });
+    Some(ExactTransport { albedo, slab })
 }
 
 fn describe_fit(fit: &GaussianFit) -> String {
@@ -289,6 +338,7 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
         let json = serde_json::json!({
             "material": m,
             "total_reflectance": m.total_reflectance(),
+            "exact_transport": exact_transport(&m),
             "fit": fit,
         });
         format!("{}\n", serde_json::to_string_pretty(&json)?)
@@ -461,6 +511,32 @@ mod tests {
         let e = build_kernel(&a).unwrap_err().to_string();
         assert!(e.starts_with("--material: unknown name"), "{e}");
         assert!(!e.contains('\n'));
+    }
+
+    /// `profile` reports exact transport beside diffusion: skin1's albedo as random walks of
+    /// the same medium give it (0.439 / 0.213 / 0.116, docs/fidelity.md), and through 10 mm
+    /// about twice diffusion's green; nothing for the Gaussian preset, which is no medium.
+    #[test]
+    fn profile_reports_exact_transport_for_a_medium() {
+        let m = load_material("skin1", Some(10.0)).unwrap();
+        let t = exact_transport(&m).unwrap();
+        for (c, walk) in [0.439, 0.213, 0.116].iter().enumerate() {
+            assert!((t.albedo[c] - walk).abs() < 0.008, "{c}: {}", t.albedo[c]);
+        }
+        let Material::Multipole { multipole, .. } = &m else {
+            panic!("a thickness makes a slab")
+        };
+        let diffusion = multipole.total_transmittance();
+        let s = t.slab.unwrap();
+        assert!((1.6..2.3).contains(&(s[0][1] / diffusion[1])), "{s:?}");
+        assert!(s[1][0] < 0.01 * s[0][0] && s[2][0] > 0.0);
+        let text = describe_material(&m);
+        assert!(
+            text.contains("exact transport") && text.contains("diffuse albedo"),
+            "{text}"
+        );
+        let skin = load_material("skin", None).unwrap();
+        assert!(exact_transport(&skin).is_none());
     }
 
     #[test]

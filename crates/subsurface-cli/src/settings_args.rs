@@ -70,10 +70,10 @@ pub struct SettingsArgs {
     /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
     /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
     /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
-    /// irradiance blurred in texture space, same T(s) as paper), diffusion = T(s) from diffusion
-    /// theory for the material's measured coefficients (multipole slab transmittance, lit by
-    /// the entry surface, plus unscattered and once-scattered light; docs/fidelity.md), off =
-    /// none [default: render.transmittance.method, diffusion].
+    /// irradiance blurred in texture space, same T(s) as paper), diffusion = light diffusing
+    /// through the material's measured medium (T(s) of a slab by exact transport, lit by the
+    /// entry surface, plus unscattered and once-scattered light; docs/fidelity.md), off = none
+    /// [default: render.transmittance.method, diffusion].
     #[arg(long, value_name = "METHOD")]
     pub transmittance: Option<TransmittanceMethod>,
     /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness

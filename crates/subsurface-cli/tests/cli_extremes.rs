@@ -252,7 +252,8 @@ translation = [0.025, 0.025, 0.0]"#,
 /// `--supersample N` renders N x N samples per pixel and box-filters them like the path
 /// tracer's film: inside the sphere every pixel keeps its value (a smooth surface), while the
 /// silhouette's pixels take the share of their area that is skin. (No specular: a highlight
-/// is as sharp as the pixels that sample it.)
+/// is as sharp as the pixels that sample it; no scattering or transmittance, so each pixel's
+/// shading is its own and the film filter is all that is measured.)
 #[test]
 fn compare_supersamples_like_a_box_filter() {
     let dir = tempdir("supersample");
@@ -277,6 +278,10 @@ specular = 0.0"#,
                 ss,
                 "--linear",
                 name,
+                "--sss",
+                "none",
+                "--transmittance",
+                "off",
             ],
             &dir,
         ));
@@ -287,10 +292,11 @@ specular = 0.0"#,
     let lum = |p: &image::Rgb<f32>| p.0.iter().sum::<f32>();
     let (mut inside, mut edge) = (0, 0);
     let (mut sum_one, mut sum_four) = (0.0, 0.0);
-    for y in 1..23i32 {
-        for x in 1..31i32 {
-            let around = (-1..=1)
-                .flat_map(|j| (-1..=1).map(move |i| (x + i, y + j)))
+    for y in 2..22i32 {
+        for x in 2..30i32 {
+            // Two pixels in from the outline every neighbour is skin lit from the same side.
+            let around = (-2..=2)
+                .flat_map(|j| (-2..=2).map(move |i| (x + i, y + j)))
                 .all(|(i, j)| lum(one.get_pixel(i as u32, j as u32)) > 1.0);
             let (x, y) = (x as u32, y as u32);
             let (a, b) = (lum(one.get_pixel(x, y)), lum(four.get_pixel(x, y)));
@@ -308,11 +314,11 @@ specular = 0.0"#,
             }
         }
     }
-    assert!(inside > 25 && edge > 4, "{inside} inside, {edge} edge");
-    assert!(
-        (sum_four / sum_one - 1.0).abs() < 0.03,
-        "{sum_four} vs {sum_one}"
-    );
+    assert!(inside > 8 && edge > 4, "{inside} inside, {edge} edge");
+    // Lambert shading falls like a cosine towards the outline, a concave function across a
+    // pixel, so the box mean sits a little below the centre's value, never above it.
+    let ratio = sum_four / sum_one;
+    assert!(ratio > 0.95 && ratio < 1.002, "{sum_four} vs {sum_one}");
     for bad in ["0", "9"] {
         let e = error_line(&subsurface(
             &[

@@ -109,11 +109,12 @@ impl TransmittanceLut {
         Self::transport_row(table, resolution, None)
     }
 
-    /// [`TransmittanceLut::transport`] seen from exit direction `angle` of
-    /// [`crate::SlabSolver::EXIT_ANGLES`] (cosines evenly spaced from grazing to the normal):
-    /// the radiance there as a factor of `albedo * E`, where the Lambertian table gives the
-    /// mean. Behind 10 mm of skin1 seen along the normal: 1.14x the mean in red, 1.28x in
-    /// green, 1.57x in blue; toward grazing it falls to nothing.
+    /// [`TransmittanceLut::transport`] with the angular shape of the light arriving at the far
+    /// face, toward direction `angle` of [`crate::SlabSolver::EXIT_ANGLES`] inside (cosines to
+    /// the direction the light flows, evenly spaced from 0 to 1; see
+    /// [`crate::TransportTable::inside`]): times `1 - F` of its crossing, the radiance leaving
+    /// in that direction as a factor of `albedo * E`. Behind 10 mm of skin1 seen along the
+    /// normal, 1.14x the Lambertian mean in red, 1.28x in green, 1.57x in blue.
     pub fn transport_at(
         table: &crate::TransportTable,
         resolution: u32,
@@ -139,7 +140,7 @@ impl TransmittanceLut {
                 let x = (s / step).min((points - 1) as f64);
                 let k = (x.floor() as usize).min(points - 2);
                 let f = x - k as f64;
-                let exit = |i: usize, c: usize| angle.map_or(1.0, |j| table.exit[i][j][c]);
+                let exit = |i: usize, c: usize| angle.map_or(1.0, |j| table.inside[i][j][c]);
                 let a = [0, 1, 2].map(|c| table.multiple[k][c] * exit(k, c));
                 let b = [0, 1, 2].map(|c| table.multiple[k + 1][c] * exit(k + 1, c));
                 [0, 1, 2].map(|c| {
@@ -329,13 +330,16 @@ mod tests {
         assert!(ratio(2) > 8.0, "blue {}", ratio(2));
         assert!(TransmittanceLut::transport(&table, 1).is_err());
         // Seen along the normal behind 10 mm, more than the mean, bluer channels more so;
-        // at grazing nothing.
+        // less light travels across the flow than along it.
         let last = crate::SlabSolver::EXIT_ANGLES - 1;
         let normal = TransmittanceLut::transport_at(&table, 2049, last).unwrap();
-        let grazing = TransmittanceLut::transport_at(&table, 2049, 0).unwrap();
-        let k = [0, 1, 2].map(|c| normal.sample(10.0)[c] / t[c]);
+        let sideways = TransmittanceLut::transport_at(&table, 2049, 0).unwrap();
+        let through = 1.0 - crate::fresnel_inside(d.eta, 1.0) as f32;
+        let k = [0, 1, 2].map(|c| through * normal.sample(10.0)[c] / t[c]);
         assert!(1.05 < k[0] && k[0] < k[1] && k[1] < k[2], "{k:?}");
-        assert_eq!(grazing.sample(10.0), [0.0; 3]);
+        for c in 0..3 {
+            assert!(sideways.sample(10.0)[c] < 0.7 * normal.sample(10.0)[c]);
+        }
         assert!(TransmittanceLut::transport_at(&table, 64, last + 1).is_err());
     }
 

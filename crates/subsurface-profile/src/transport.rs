@@ -212,6 +212,12 @@ pub struct SlabResult {
     /// exact transport peaks toward the normal behind thick slabs (1.15x that in red behind
     /// 20 mm of skin1, 1.75x in blue) and falls to nothing at grazing.
     pub exit_radiance: Vec<f64>,
+    /// The same light just inside the far face, before it crosses: its radiance toward
+    /// [`SlabSolver::EXIT_ANGLES`] evenly spaced cosines to the normal (0 to 1), per unit
+    /// incident irradiance. `exit_radiance` is this at the refracted direction times `1 - F`
+    /// over `eta^2`; kept apart, it is the shape of the light around the direction it flows,
+    /// which a renderer can turn toward a surface that is not the slab's.
+    pub inside_radiance: Vec<f64>,
 }
 
 /// The adding-doubling solver for one boundary index; reusable for every channel and
@@ -436,7 +442,22 @@ impl SlabSolver {
             reflected: entry * flux(&x[n..]),
             unscattered: entry * l.beam * entry,
             exit_radiance: self.exit_radiance(&multiple, entry),
+            inside_radiance: (0..Self::EXIT_ANGLES)
+                .map(|k| {
+                    entry * self.field_at(&multiple, k as f64 / (Self::EXIT_ANGLES - 1) as f64)
+                })
+                .collect(),
         }
+    }
+
+    /// The field `down` (per quadrature direction) toward cosine `mu` to the normal: linear
+    /// between the nodes, held beyond the first and last.
+    fn field_at(&self, down: &[f64], mu: f64) -> f64 {
+        let n = self.n();
+        let j = self.mu.partition_point(|&m| m < mu).clamp(1, n - 1);
+        let (m0, m1) = (self.mu[j - 1], self.mu[j]);
+        let f = ((mu - m0) / (m1 - m0)).clamp(0.0, 1.0);
+        down[j - 1] * (1.0 - f) + down[j] * f
     }
 
     /// Radiance outside at [`Self::EXIT_ANGLES`] exit cosines from the field just inside the
@@ -445,18 +466,14 @@ impl SlabSolver {
     /// by `eta^2` (the solid angle widens on the way out). The field is linear between the
     /// nodes, which lie on both sides of every `mu_i` but the last hundredth below the normal.
     fn exit_radiance(&self, down: &[f64], entry: f64) -> Vec<f64> {
-        let n = self.n();
         let eta2 = self.eta * self.eta;
         (0..Self::EXIT_ANGLES)
             .map(|k| {
                 let mu_o = k as f64 / (Self::EXIT_ANGLES - 1) as f64;
                 let mu_i = (1.0 - (1.0 - mu_o * mu_o) / eta2).max(0.0).sqrt();
-                let j = self.mu.partition_point(|&m| m < mu_i).clamp(1, n - 1);
-                let (m0, m1) = (self.mu[j - 1], self.mu[j]);
-                let f = (mu_i - m0) / (m1 - m0);
                 // The field inside is smooth in mu; the boundary's 1 - F, which falls to 0 at
                 // the critical angle, is taken exactly.
-                let inside = down[j - 1] * (1.0 - f) + down[j] * f;
+                let inside = self.field_at(down, mu_i);
                 (entry * (1.0 - fresnel_inside(self.eta, mu_i)) * inside / eta2).max(0.0)
             })
             .collect()
@@ -521,7 +538,7 @@ pub fn slab_transport(dipole: &Dipole, points: usize, s_max_mm: f64) -> Result<T
     let solver = SlabSolver::new(dipole.eta)?;
     let step = s_max_mm / (points - 1) as f64;
     let mut multiple = vec![[0.0; 3]; points];
-    let mut exit = vec![[[1.0; 3]; SlabSolver::EXIT_ANGLES]; points];
+    let mut inside = vec![[[1.0; 3]; SlabSolver::EXIT_ANGLES]; points];
     let mut albedo = [0.0; 3];
     for c in 0..3 {
         let ch = dipole.channel(c);
@@ -529,18 +546,21 @@ pub fn slab_transport(dipole: &Dipole, points: usize, s_max_mm: f64) -> Result<T
         for (i, s) in slabs.iter().enumerate() {
             let t = (s.transmitted - s.transmitted_once).max(0.0);
             multiple[i + 1][c] = t;
-            for (k, l) in s.exit_radiance.iter().enumerate() {
-                exit[i + 1][k][c] = if t > 0.0 { PI * l / t } else { 1.0 };
+            // pi L / T_ms, over eta^2 for the radiance that widens on its way out: times
+            // 1 - F of the crossing it is the exit's factor of a Lambertian radiance.
+            let eta2 = dipole.eta * dipole.eta;
+            for (k, l) in s.inside_radiance.iter().enumerate() {
+                inside[i + 1][k][c] = if t > 0.0 { PI * l / (eta2 * t) } else { 1.0 };
             }
         }
         albedo[c] = solver.diffuse_reflectance(ch.sigma_t_prime, ch.alpha_prime)?;
     }
     // No slab has no exit distribution; the thinnest one's stands in.
-    exit[0] = exit[1];
+    inside[0] = inside[1];
     Ok(TransportTable {
         s_max_mm,
         multiple,
-        exit,
+        inside,
         albedo,
     })
 }
@@ -552,11 +572,13 @@ pub struct TransportTable {
     /// Diffuse transmittance of light scattered at least twice, per channel, at evenly spaced
     /// thicknesses from 0 (no slab: 0) to `s_max_mm`.
     pub multiple: Vec<[f64; 3]>,
-    /// How the multiply scattered light leaves, per thickness: its radiance at
-    /// [`SlabSolver::EXIT_ANGLES`] evenly spaced exit cosines (grazing to normal) as a factor
-    /// of a Lambertian exit's, `pi L(mu_o) / T_ms` (its cosine-weighted mean over the
-    /// hemisphere is 1).
-    pub exit: Vec<[[f64; 3]; SlabSolver::EXIT_ANGLES]>,
+    /// How the multiply scattered light arrives at the far face, per thickness: its radiance
+    /// inside toward [`SlabSolver::EXIT_ANGLES`] evenly spaced cosines `c` to the direction it
+    /// flows (the slab's normal), as `pi L(c) / (eta^2 T_ms)`. Leaving through a surface at
+    /// exit cosine `mu_o` with its refracted direction at `c`, the light's radiance is `(1 -
+    /// F(mu_o))` times this times a Lambertian exit's: in a slab `c` is the refracted `mu_o`,
+    /// and the cosine-weighted mean over the hemisphere is 1.
+    pub inside: Vec<[[f64; 3]; SlabSolver::EXIT_ANGLES]>,
     /// Total diffuse reflectance of the half-space per channel.
     pub albedo: [f64; 3],
 }
@@ -823,6 +845,12 @@ mod tests {
             1.1 < peak[0] && peak[0] < peak[1] && peak[1] < peak[2],
             "{peak:?}"
         );
+        // Inside along the normal, less the crossing, is the exit along the normal.
+        let ch = d.channel(1);
+        let r = s.slab(ch.sigma_t_prime, ch.alpha_prime, 5.0).unwrap();
+        let through = 1.0 - fresnel_inside(d.eta, 1.0);
+        let want = r.inside_radiance[k - 1] * through / (d.eta * d.eta);
+        assert!((r.exit_radiance[k - 1] / want - 1.0).abs() < 1e-9);
     }
 
     #[test]

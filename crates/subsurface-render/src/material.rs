@@ -3,8 +3,11 @@
 
 use std::collections::HashMap;
 
+use std::sync::Arc;
+
 use subsurface_profile::{
-    Dipole, KernelParams, Material, Medium, ScreenKernels, SumOfGaussians, material,
+    Dipole, KernelParams, Material, Medium, ScreenKernels, SumOfGaussians, TransmittanceLut,
+    TransportTable, material, slab_transport,
 };
 
 use crate::error::RenderError;
@@ -21,9 +24,14 @@ pub struct MaterialOptics {
     /// The preset is d'Eon's skin Gaussians, for which the papers' own kernels exist.
     pub is_skin_preset: bool,
     /// What the material's albedo (and colour texture) multiplies: the medium's total
-    /// diffuse reflectance R_d for a measured medium, so that the real-time colour is the
-    /// path-traced medium's; 1 for the Gaussian skin preset, whose weights carry no colour.
+    /// diffuse reflectance for a measured medium (exact transport, `transport.albedo`), so
+    /// that the real-time colour is the path-traced medium's; 1 for the Gaussian skin preset,
+    /// whose weights carry no colour.
     pub diffuse_albedo: [f32; 3],
+    /// Exact transport through slabs of the medium (skin1's for the Gaussian preset): the
+    /// `diffusion` transmittance's T(s) and the diffuse albedo. Shared: the solve takes a
+    /// few hundred milliseconds, once per medium.
+    pub transport: Arc<TransportTable>,
 }
 
 /// Jensen et al. 2001's skin1 (sigma_a, sigma_s' in 1/mm, eta), what the Gaussian skin preset
@@ -86,6 +94,15 @@ impl MaterialCache {
         let m = medium
             .material()
             .map_err(|e| RenderError::invalid(field, e.to_string()))?;
+        let transport = |dipole: &Dipole| {
+            slab_transport(
+                dipole,
+                TransmittanceLut::TRANSPORT_POINTS,
+                f64::from(TransmittanceLut::DIFFUSION_S_MAX_MM),
+            )
+            .map(Arc::new)
+            .map_err(|e| RenderError::invalid(field, e.to_string()))
+        };
         let optics = match &m {
             Material::Gaussians { profile, .. } => {
                 let dipole = skin1();
@@ -93,6 +110,7 @@ impl MaterialCache {
                     profile: profile.clone(),
                     sigma_t: [0, 1, 2]
                         .map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32),
+                    transport: transport(&dipole)?,
                     dipole,
                     is_skin_preset: true,
                     diffuse_albedo: [1.0; 3],
@@ -108,12 +126,14 @@ impl MaterialCache {
                     .map_err(|e| RenderError::invalid(field, e.to_string()))?;
                 let sigma_t =
                     [0, 1, 2].map(|c| (dipole.sigma_a[c] + dipole.sigma_s_prime[c]) as f32);
+                let transport = transport(dipole)?;
                 MaterialOptics {
                     profile: fit.profile,
                     sigma_t,
                     dipole: *dipole,
                     is_skin_preset: false,
-                    diffuse_albedo: dipole.total_reflectance().map(|r| r as f32),
+                    diffuse_albedo: transport.albedo.map(|r| r as f32),
+                    transport,
                 }
             }
         };

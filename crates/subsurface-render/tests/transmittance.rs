@@ -393,12 +393,14 @@ fn no_transmittance_where_the_surface_faces_the_light() {
     );
 }
 
-/// `diffusion`: a 6 mm slab of skin lit from behind passes what the multipole says a 6 mm
-/// slab of skin1 transmits (T_t / R_d, times the entry face's irradiance E = 1), far more red
-/// than the Gaussian T(s). The thickness is measured from the shaded point itself (the normal
-/// shrink only finds the entry texel), so it is the slab's own 6 mm.
+/// `diffusion`: a 6 mm slab of skin lit from behind passes what exact transport says a 6 mm
+/// slab of skin1 transmits by multiple scattering (T_ms / albedo, times the entry face's
+/// irradiance E = 1), seen along the normal (the slab's exit shape toward the normal, times the
+/// boundary's 1 - F0), far more red than the Gaussian T(s). The thickness is measured from the
+/// shaded point itself (the normal shrink only finds the entry texel), so it is the slab's own
+/// 6 mm.
 #[test]
-fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
+fn backlit_slab_transmits_the_exact_slab_transmittance() {
     if context().is_none() {
         return;
     }
@@ -410,9 +412,9 @@ fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
     let (diffusion, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     let (paper, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Paper);
     let centre = (32 * 64 + 32) as usize;
-    let want = skin1_diffusion_t(thickness * 1000.0);
+    let want = skin1_transport_t(thickness * 1000.0, 1.0, 1.0);
     let got = diffusion[centre];
-    assert_transmits(got, want, "multipole");
+    assert_transmits(got, want, "exact transport");
     assert!(want[0] > 0.3, "6 mm of skin1 should pass red: {want:?}");
     assert!(
         got[0] > 100.0 * paper[centre][0],
@@ -421,12 +423,29 @@ fn backlit_slab_transmits_the_diffusion_slab_transmittance() {
     );
 }
 
-fn skin1_diffusion_t(s_mm: f32) -> [f32; 3] {
+/// What `diffusion` sends toward the camera through `s_mm` of skin1 (the Gaussian skin
+/// preset's medium), by the CPU: exact transport's T_ms / albedo with the slab's angular shape
+/// at cosine `c` to the flow (the table's rows, blended as the GPU's filter blends them),
+/// times 1 - F of the crossing at exit cosine `mu_o` (Schlick, F0 of eta 1.3).
+fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
+    use subsurface_profile::{SlabSolver, TransmittanceLut};
     let skin1 =
         subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
-    subsurface_profile::TransmittanceLut::diffusion(&skin1, 2048, 32.0)
-        .unwrap()
-        .sample(s_mm)
+    let table =
+        subsurface_profile::slab_transport(&skin1, TransmittanceLut::TRANSPORT_POINTS, 32.0)
+            .unwrap();
+    let row = c.clamp(0.0, 1.0) * (SlabSolver::EXIT_ANGLES - 1) as f32;
+    let k = (row.floor() as usize).min(SlabSolver::EXIT_ANGLES - 2);
+    let f = row - k as f32;
+    let at = |k: usize| {
+        TransmittanceLut::transport_at(&table, 2048, k)
+            .unwrap()
+            .sample(s_mm)
+    };
+    let (a, b) = (at(k), at(k + 1));
+    let e = (1.0 - mu_o).powi(5);
+    let fresnel = e + skin1_f0() * (1.0 - e);
+    [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * (1.0 - fresnel))
 }
 
 /// `diffusion` lights the back by the entry face's own irradiance, E cos(theta), from the normal
@@ -443,9 +462,26 @@ fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     );
     let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:
-    // on a 60 degree slope that entry is 0.1 sin 60 tan 60 = 0.15 mm nearer.
-    let want = skin1_diffusion_t(6.0 - 0.15).map(|t| t * 0.5);
-    assert_transmits(diffuse[32 * 64 + 32], want, "E cos 60 x T(6 mm)");
+    // on a 60 degree slope that entry is 0.1 sin 60 tan 60 = 0.15 mm nearer. The camera sees
+    // the face at 60 degrees; the light flows halfway between the face's normal and the
+    // light's direction inside.
+    let n = glam::Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+    let (v, l) = (glam::Vec3::Z, -glam::Vec3::Z);
+    let flow = (n - l).normalize();
+    let inside = -refract(-v, n, 1.0 / SKIN1_ETA);
+    let want = skin1_transport_t(6.0 - 0.15, inside.dot(flow), n.dot(v)).map(|t| t * 0.5);
+    assert_transmits(
+        diffuse[32 * 64 + 32],
+        want,
+        "E cos 60 x T(6 mm) toward the camera",
+    );
+}
+
+/// GLSL's refract: `i` incident, `n` the normal against it, `eta` the index ratio.
+fn refract(i: glam::Vec3, n: glam::Vec3, eta: f32) -> glam::Vec3 {
+    let d = n.dot(i);
+    let k = 1.0 - eta * eta * (1.0 - d * d);
+    eta * i - (eta * d + k.sqrt()) * n
 }
 
 /// skin1's boundary (the Gaussian skin preset's measured medium): eta, Schlick's F0 and

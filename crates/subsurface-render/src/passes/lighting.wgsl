@@ -58,7 +58,9 @@ fn fresnel(h: vec3<f32>, v: vec3<f32>) -> f32 {
 // The same boundary's Schlick reflectance at an angle of cosine `cos_theta`; transmittance.wgsl
 // takes 1 minus it for light crossing the boundary.
 fn boundary_fresnel(cos_theta: f32) -> f32 {
-    let e = pow(1.0 - max(cos_theta, 0.0), 5.0);
+    // Clamped at 1 too: pow of a negative base is NaN, and the cosine of a unit vector with
+    // itself rounds above 1 (the UV-space irradiance pass views every texel along its normal).
+    let e = pow(1.0 - clamp(cos_theta, 0.0, 1.0), 5.0);
     let r = (object.eta - 1.0) / (object.eta + 1.0);
     return e + r * r * (1.0 - e);
 }

@@ -2,28 +2,31 @@
 //! the lighting pass (see `transmittance.wgsl`): thickness from the standard linear-depth
 //! shadow maps, T(s) from the material's own diffusion profile, stored in a small LUT.
 
-use subsurface_profile::TransmittanceLut;
+use subsurface_profile::{SlabSolver, TransmittanceLut};
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
 pub use crate::material::{MaterialCache, MaterialOptics};
 pub use crate::settings::{TransmittanceMethod, TransmittanceSettings};
 
-/// The T(s) tables of a material as one Rgba16Float texture (filterable everywhere), two rows:
-/// the sum-of-Gaussians T(s) of 000_* over the returned range in mm (row 0), and the
-/// diffusion T(s) over `TransmittanceLut::DIFFUSION_S_MAX_MM` (row 1, `Diffusion`).
+/// The T(s) tables of a material as one Rgba16Float texture (filterable everywhere): row 0 the
+/// sum-of-Gaussians T(s) of 000_* over the returned range in mm, then one row per exit direction
+/// of the `Diffusion` method's T(s), exact transport of multiply scattered light through slabs
+/// of the medium seen from that direction (`TransmittanceLut::transport_at`, exit cosines evenly
+/// spaced from grazing to the normal), over `TransmittanceLut::DIFFUSION_S_MAX_MM`.
 pub fn lut_texture(
     ctx: &GpuContext,
     optics: &MaterialOptics,
 ) -> Result<(wgpu::TextureView, f32), RenderError> {
     let res = TransmittanceLut::DEFAULT_RESOLUTION;
     let lut = TransmittanceLut::new(&optics.profile, res, TransmittanceLut::DEFAULT_S_MAX_MM)?;
-    let diffusion =
-        TransmittanceLut::diffusion(&optics.dipole, res, TransmittanceLut::DIFFUSION_S_MAX_MM)?;
-    let data: Vec<half::f16> = lut
-        .to_rgba()
+    let mut rows = vec![lut.to_rgba()];
+    for angle in 0..SlabSolver::EXIT_ANGLES {
+        rows.push(TransmittanceLut::transport_at(&optics.transport, res, angle)?.to_rgba());
+    }
+    let data: Vec<half::f16> = rows
         .iter()
-        .chain(diffusion.to_rgba().iter())
+        .flatten()
         .flatten()
         .map(|v| half::f16::from_f32(*v))
         .collect();
@@ -31,7 +34,7 @@ pub fn lut_texture(
         label: Some("transmittance lut"),
         size: wgpu::Extent3d {
             width: res,
-            height: 2,
+            height: rows.len() as u32,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -47,7 +50,7 @@ pub fn lut_texture(
         wgpu::TexelCopyBufferLayout {
             offset: 0,
             bytes_per_row: Some(8 * res),
-            rows_per_image: Some(2),
+            rows_per_image: Some(rows.len() as u32),
         },
         texture.size(),
     );

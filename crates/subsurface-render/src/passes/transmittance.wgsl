@@ -41,25 +41,50 @@ fn shadow_texel(light: Light, sc: ShadowCoord) -> vec2<i32> {
 // Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the LUT's second row).
 const DIFFUSION_RANGE_MM: f32 = 32.0;
 
-// One row of the object's T(s) LUT over 0..range mm, 0 beyond it. Row 0 sits at v = 0.25 and
-// row 1 at v = 0.75, the texel centres of the two-texel-high table, so rows never mix.
-fn lut_row(s_mm: f32, range: f32, v: f32) -> vec3<f32> {
-    let res = f32(textureDimensions(transmittance_lut).x);
+// One row of the object's T(s) LUT over 0..range mm, 0 beyond it. `row` is in texels: row 0
+// holds the sum-of-Gaussians T(s), rows 1..=N the transport T(s) per exit direction; a
+// fractional row between 1 and N blends two exit directions, never row 0.
+fn lut_row(s_mm: f32, range: f32, row: f32) -> vec3<f32> {
+    let size = vec2<f32>(textureDimensions(transmittance_lut));
     if (s_mm > range) {
         return vec3<f32>(0.0);
     }
-    let u = (s_mm / range * (res - 1.0) + 0.5) / res;
-    return textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, v), 0.0).rgb;
+    let u = (s_mm / range * (size.x - 1.0) + 0.5) / size.x;
+    return textureSampleLevel(transmittance_lut, lut_sampler, vec2<f32>(u, (row + 0.5) / size.y), 0.0).rgb;
 }
 
 // T(s) of the object's sum-of-Gaussians profile (000_*).
 fn profile_transmittance(s_mm: f32) -> vec3<f32> {
-    return lut_row(s_mm, object.lut_range_mm, 0.25);
+    return lut_row(s_mm, object.lut_range_mm, 0.0);
 }
 
-// T(s) from diffusion theory for the object's measured coefficients (lut.rs, `diffusion`).
-fn diffusion_transmittance(s_mm: f32) -> vec3<f32> {
-    return lut_row(s_mm, DIFFUSION_RANGE_MM, 0.75);
+// Multiply scattered light through a slab of the object's medium by exact transport
+// (lut.rs, `transport_at`), arriving at the surface with direction cosine `c` to the way it
+// flows: behind thick parts it travels mostly along its flow (1.1-1.7x a Lambertian exit's
+// radiance there, bluer channels more).
+fn diffusion_transmittance(s_mm: f32, c: f32) -> vec3<f32> {
+    let angles = f32(textureDimensions(transmittance_lut).y) - 1.0;
+    return lut_row(s_mm, DIFFUSION_RANGE_MM, 1.0 + clamp(c, 0.0, 1.0) * (angles - 1.0));
+}
+
+// The factor of the transmitted light's Lambertian radiance that leaves toward the camera:
+// inside, the slab's angular shape around the direction `flow` the light moves in, then 1 - F
+// of the boundary at the shaded point. In a slab the light flows along the normal; through a
+// backlit sphere or finger it flows along the light, which at the rim runs along the surface
+// toward the camera. `flow` is taken halfway between the two, normalize(n - l): against
+// path-traced 20 mm spheres and 14 mm cylinders lit from behind (one channel at a time) the
+// normal alone left the rims 17-19 % dark, the light's direction alone made them 22 % bright,
+// and the halfway direction is within 6 % at the rim and 1-11 % elsewhere.
+fn transmitted_exit(s_mm: f32, n: vec3<f32>, v: vec3<f32>, flow: vec3<f32>) -> vec3<f32> {
+    let eta = max(object.eta, 1.0001);
+    let mu_o = dot(n, v);
+    // `!(> 0)`: a degenerate normal (NaN) must give nothing, not NaN that a blur spreads.
+    if (!(mu_o > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    // The direction inside that refracts into v.
+    let inside = -refract(-v, n, 1.0 / eta);
+    return diffusion_transmittance(s_mm, dot(inside, flow)) * (1.0 - boundary_fresnel(mu_o));
 }
 
 // Where `light` enters the object on its way to `p`, read from the standard linear-distance
@@ -280,7 +305,10 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
             let n_back = entry.normal;
             if (dot(n_back, n_back) > 0.5) {
                 let unlit = select(1.0 - lit, 1.0, facing <= 0.0);
-                out.diffuse = diffusion_transmittance(s_mm) * max(dot(n_back, l), 0.0) * unlit;
+                // (A shadowed point facing the light head-on has n = l: its flow is n.)
+                let to_exit = n_vertex - l;
+                let flow = select(n_vertex, normalize(to_exit), dot(to_exit, to_exit) > 1e-6);
+                out.diffuse = transmitted_exit(s_mm, n_vertex, v, flow) * max(dot(n_back, l), 0.0) * unlit;
                 let ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
                 // Single scattering only where the surface faces away from the light: where it
                 // faces the light, its shadow test's penumbra and the map's texels would print

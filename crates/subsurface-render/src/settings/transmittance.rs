@@ -21,13 +21,16 @@ pub enum TransmittanceMethod {
     /// the surface nearest the light, whose irradiance, blurred in texture space, is
     /// attenuated by the same T(s) as `Paper`.
     Tsm,
-    /// Diffusion theory (our extension, see `docs/fidelity.md`): T(s) is the light a slab of
-    /// the material's measured coefficients transmits (Donner and Jensen 2005's multipole),
-    /// relative to what it reflects; it decays exponentially rather than like a Gaussian, so
-    /// fingers and thick ears still glow red. The Gaussian skin preset uses skin1's
-    /// coefficients. The default: against the path tracer it is the closest on every backlit
-    /// canonical scene (docs/fidelity.md), where `Paper`'s Gaussian T(s) has all but vanished
-    /// at the thickness of a finger.
+    /// Light diffusing through the medium (our extension, see `docs/fidelity.md`): T(s) is the
+    /// multiply scattered light that a slab of the material's measured coefficients transmits,
+    /// by exact transport (adding-doubling; diffusion theory's multipole passes half the green
+    /// and a tenth of the blue through a finger), relative to what it reflects, leaving in the
+    /// slab's angular shape around the way the light flows; plus the light scattered once
+    /// (along the view ray) and the light that crosses thin parts unscattered. It decays
+    /// exponentially rather than like a Gaussian, so fingers and thick ears still glow red.
+    /// The Gaussian skin preset uses skin1's coefficients. The default: against the path
+    /// tracer it is the closest on every backlit canonical scene (docs/fidelity.md), where
+    /// `Paper`'s Gaussian T(s) has all but vanished at the thickness of a finger.
     #[default]
     Diffusion,
 }
