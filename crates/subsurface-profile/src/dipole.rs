@@ -254,6 +254,7 @@ impl Multipole {
 mod tests {
     use super::*;
     use crate::gaussian::simpson;
+    use crate::materials::skin1;
 
     fn integrate_plane(f: impl Fn(f64) -> f64, r_max: f64) -> f64 {
         // Substitute r = u^2 to resolve the peak at the origin.
@@ -268,10 +269,6 @@ mod tests {
 
     fn marble() -> Dipole {
         Dipole::new([0.0021, 0.0041, 0.0071], [2.19, 2.62, 3.00], 1.3).unwrap()
-    }
-
-    fn skin1() -> Dipole {
-        Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap()
     }
 
     #[test]

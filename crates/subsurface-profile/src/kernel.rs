@@ -644,7 +644,7 @@ mod tests {
         // Skin1's fitted profile, red (its heavy tail): the separable kernel's running sum
         // across an edge must be the 2-D profile's edge response, what the knife-edge scene
         // measures; the radial sampling of SeparableSSS.h falls well short of it.
-        let d = crate::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
+        let d = crate::materials::skin1();
         let fit = crate::Material::Dipole {
             name: "skin1".into(),
             dipole: d,

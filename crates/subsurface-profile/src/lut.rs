@@ -212,6 +212,7 @@ impl TransmittanceLut {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::materials::skin1;
 
     #[test]
     fn default_lut_error_is_below_1e_3() {
@@ -262,10 +263,6 @@ mod tests {
                 .starts_with("s_max_mm:")
         );
         assert!(TransmittanceLut::new(&skin, 16, f32::INFINITY).is_err());
-    }
-
-    fn skin1() -> Dipole {
-        Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap()
     }
 
     #[test]

@@ -65,6 +65,16 @@ pub fn material_names() -> Vec<&'static str> {
         .collect()
 }
 
+/// Jensen 2001's skin1 as a dipole: the medium the canonical scenes render, shared by the
+/// crate's tests.
+#[cfg(test)]
+pub(crate) fn skin1() -> crate::Dipole {
+    match material("skin1").unwrap() {
+        Material::Dipole { dipole, .. } => dipole,
+        _ => unreachable!("skin1 is a measured medium"),
+    }
+}
+
 /// Looks a preset up by name, ignoring case, spaces, '-' and '_'
 /// ("Whole milk" = "wholemilk").
 pub fn material(name: &str) -> Result<Material> {

@@ -170,14 +170,7 @@ impl SlabTransmittance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::materials::{Material, material};
-
-    fn skin1() -> Dipole {
-        match material("skin1").unwrap() {
-            Material::Dipole { dipole, .. } => dipole,
-            _ => unreachable!(),
-        }
-    }
+    use crate::materials::skin1;
 
     #[test]
     fn a_clear_slab_shows_no_light_but_its_scattered_light() {

@@ -586,15 +586,8 @@ pub struct TransportTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::materials::{Material, material};
+    use crate::materials::skin1;
     use crate::slab::slab_radiance;
-
-    fn skin1() -> Dipole {
-        match material("skin1").unwrap() {
-            Material::Dipole { dipole, .. } => dipole,
-            _ => unreachable!(),
-        }
-    }
 
     #[test]
     fn quadrature_integrates_polynomials_on_both_sides_of_the_critical_angle() {

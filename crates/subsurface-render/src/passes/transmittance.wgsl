@@ -38,7 +38,7 @@ fn shadow_texel(light: Light, sc: ShadowCoord) -> vec2<i32> {
     return clamp(vec2<i32>(floor(sc.uv * size)), vec2<i32>(0), vec2<i32>(i32(size) - 1));
 }
 
-// Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the LUT's second row).
+// Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the transport rows, 1..=16).
 const DIFFUSION_RANGE_MM: f32 = 32.0;
 
 // One row of the object's T(s) LUT over 0..range mm, 0 beyond it. `row` is in texels: row 0
