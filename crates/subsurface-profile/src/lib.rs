@@ -8,7 +8,8 @@
 //! * [`Dipole`], [`Multipole`], [`material`]: physically based profiles and the
 //!   measured materials of Jensen et al. 2001; [`fit_sum_of_gaussians`] turns any
 //!   of them into Gaussians (and so into a kernel and a `T(s)`).
-//! * [`oracle`]: CPU references of the screen-space blur passes.
+//! * [`oracle`]: CPU references of the screen-space blur passes; [`specular`]: the skin
+//!   boundary's reflection that the lighting pass evaluates.
 //!
 //! Units: millimetres for distances, mm^2 for variances, mm^-1 for coefficients.
 
@@ -26,6 +27,7 @@ mod materials;
 mod medium;
 pub mod oracle;
 mod slab;
+pub mod specular;
 mod transport;
 
 pub use dipole::{DiffusionChannel, Dipole, Multipole, fresnel_diffuse_reflectance};

@@ -72,7 +72,7 @@ pub struct ObjectUniform {
     pub albedo: [f32; 3],
     /// Beckmann roughness m.
     pub roughness: f32,
-    /// Kelemen/Szirmay-Kalos rho_s.
+    /// Specular intensity rho_s (1: the boundary's own reflection).
     pub specular: f32,
     pub sss_strength: f32,
     /// Scene units per profile millimetre.

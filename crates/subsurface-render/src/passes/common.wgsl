@@ -51,7 +51,7 @@ struct Object {
     normal_matrix: mat4x4<f32>,
     albedo: vec3<f32>,     // linear
     roughness: f32,        // Beckmann m
-    specular: f32,         // Kelemen/Szirmay-Kalos rho_s
+    specular: f32,         // rho_s on the boundary's reflection
     sss_strength: f32,     // 0 = not skin
     world_per_mm: f32,     // scene units per profile millimetre
     translucency: f32,     // thickness scale of transmittance

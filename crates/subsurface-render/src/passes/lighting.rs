@@ -1,4 +1,5 @@
-//! The lighting pass: Lambert diffuse with albedo, Kelemen/Szirmay-Kalos specular, normal
+//! The lighting pass: Lambert diffuse with albedo, the rough boundary's specular (Cook-Torrance
+//! with Beckmann facets and Smith masking, `subsurface_profile::specular`), normal
 //! maps, spot falloff, inverse-square attenuation and shadows filtered by percentage-closer
 //! gathers on the shadow maps' z-buffer (linear light distance stays for thickness). A depth
 //! pre-pass first keeps the nearest surface, so the shader runs once per pixel. It writes

@@ -40,7 +40,8 @@ struct GBuffer {
     @location(3) sss: vec4<f32>,   // strength, scene units per profile mm, profile index
 };
 
-// Beckmann distribution (d'Eon and Luebke 2007, Kelemen/Szirmay-Kalos skin specular).
+// Beckmann distribution times pi (our radiance is pi times the path tracer's for one
+// emitter; subsurface_profile::specular::beckmann).
 fn beckmann(ndoth: f32, m: f32) -> f32 {
     let c2 = max(ndoth * ndoth, 1e-4);
     let tan2 = (1.0 - c2) / c2;
@@ -65,17 +66,35 @@ fn boundary_fresnel(cos_theta: f32) -> f32 {
     return e + r * r * (1.0 - e);
 }
 
-// Kelemen/Szirmay-Kalos specular BRDF times cos: rho_s * P_H * F / |L + V|^2 * (N.L).
-fn ks_specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32) -> f32 {
+// Smith's masking of a Beckmann surface seen at cosine `cos_theta` to its normal, by Walter et
+// al. 2007's rational fit (0.35 % error), the form Mitsuba's rough dielectric uses.
+fn beckmann_smith_g1(cos_theta: f32, m: f32) -> f32 {
+    let c = clamp(cos_theta, 1e-4, 1.0);
+    let a = c / (m * sqrt(max(1.0 - c * c, 1e-8)));
+    if (a >= 1.6) {
+        return 1.0;
+    }
+    return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+}
+
+// The boundary's specular reflection times N.L: rho_s * D * F * G / (4 N.V), Cook-Torrance
+// with Beckmann facets and Smith's masking of both directions, the reflection of the rough
+// dielectric the path tracer renders (rho_s = 1; CPU reference and tests in
+// subsurface_profile::specular). Kelemen/Szirmay-Kalos (d'Eon and Luebke 2007) stands in
+// |L + V|^2 / 4 for G's N.L N.V: the same at the highlight, but where a back light grazes a
+// rim toward the camera |L + V| goes to 0, and it gave 44x the path tracer's reflection on the
+// finger-backlit scene's outline (docs/fidelity.md), where G bounds it.
+fn boundary_specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32) -> f32 {
     let ndotl = dot(n, l);
-    if (ndotl <= 0.0) {
+    let ndotv = dot(n, v);
+    let h_unnorm = l + v;
+    if (!(ndotl > 0.0) || !(ndotv > 0.0) || dot(h_unnorm, h_unnorm) < 1e-12) {
         return 0.0;
     }
-    let h_unnorm = l + v;
     let h = normalize(h_unnorm);
-    let ph = beckmann(max(dot(n, h), 0.0), m);
-    let fr = ph * fresnel(h, v) / max(dot(h_unnorm, h_unnorm), 1e-4);
-    return max(ndotl * rho_s * fr, 0.0);
+    let d = beckmann(max(dot(n, h), 0.0), m);
+    let g = beckmann_smith_g1(ndotv, m) * beckmann_smith_g1(ndotl, m);
+    return max(rho_s * d * fresnel(h, v) * g / (4.0 * ndotv), 0.0);
 }
 
 // How texture-space diffusion and translucent shadow maps enter this object's shading
@@ -158,7 +177,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
         let t = transmittance(light, world, n_vertex, l, v, shadow);
         s.transmitted += radiance * t.diffuse;
-        s.specular += radiance * (shadow * ks_specular(n, l, v, m, rho_s) + t.ballistic);
+        s.specular += radiance * (shadow * boundary_specular(n, l, v, m, rho_s) + t.ballistic);
     }
     return s;
 }

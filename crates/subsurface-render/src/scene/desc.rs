@@ -413,7 +413,7 @@ pub struct MaterialDesc {
     pub texture_flip_v: bool,
     /// Beckmann roughness m, in (0, 1].
     pub roughness: f32,
-    /// Kelemen/Szirmay-Kalos specular intensity rho_s, >= 0.
+    /// Specular intensity rho_s on the boundary's Cook-Torrance reflection, >= 0.
     pub specular: f32,
     /// 0 = not skin (no subsurface scattering), 1 = full.
     pub sss_strength: f32,
