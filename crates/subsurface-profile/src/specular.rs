@@ -46,7 +46,6 @@ pub fn schlick(cos_theta: f64, eta: f64) -> f64 {
 /// radiance-intensity, pi `f_r N.L` = `D F G / (4 N.V)` with [`beckmann`]'s `D`. Zero where
 /// either direction is below the surface.
 pub fn boundary_reflection(n: [f64; 3], l: [f64; 3], v: [f64; 3], alpha: f64, eta: f64) -> f64 {
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let (nl, nv) = (dot(n, l), dot(n, v));
     let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
     let len = dot(h, h).sqrt();
@@ -56,6 +55,10 @@ pub fn boundary_reflection(n: [f64; 3], l: [f64; 3], v: [f64; 3], alpha: f64, et
     let h = h.map(|x| x / len);
     let g = beckmann_smith_g1(nv, alpha) * beckmann_smith_g1(nl, alpha);
     beckmann(dot(n, h).max(0.0), alpha) * schlick(dot(v, h), eta) * g / (4.0 * nv)
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[cfg(test)]
@@ -126,13 +129,10 @@ mod tests {
     fn kelemen_szirmay_kalos_agrees_where_light_and_camera_share_a_side() {
         // d'Eon and Luebke's skin specular, P_H F / |L + V|^2 N.L, with the same P_H and F.
         let ks = |n: [f64; 3], l: [f64; 3], v: [f64; 3]| {
-            let h: Vec<f64> = (0..3).map(|i| l[i] + v[i]).collect();
-            let len2: f64 = h.iter().map(|x| x * x).sum();
-            let hn: Vec<f64> = h.iter().map(|x| x / len2.sqrt()).collect();
-            let nh: f64 = (0..3).map(|i| n[i] * hn[i]).sum();
-            let vh: f64 = (0..3).map(|i| v[i] * hn[i]).sum();
-            let nl: f64 = (0..3).map(|i| n[i] * l[i]).sum();
-            beckmann(nh, ALPHA) * schlick(vh, ETA) / len2 * nl
+            let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
+            let len2 = dot(h, h);
+            let h = h.map(|x| x / len2.sqrt());
+            beckmann(dot(n, h), ALPHA) * schlick(dot(v, h), ETA) / len2 * dot(n, l)
         };
         let n = [0.0, 0.0, 1.0];
         // At the highlight (mirror directions) Kelemen/Szirmay-Kalos's |L + V|^2 / 4 is N.L N.V

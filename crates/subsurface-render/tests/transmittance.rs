@@ -5,6 +5,7 @@ mod common;
 
 use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
+use subsurface_profile::specular::schlick;
 use subsurface_render::SssMethod;
 use subsurface_render::TransmittanceMethod;
 use subsurface_render::{DebugView, Renderer, Scene};
@@ -443,8 +444,7 @@ fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
             .sample(s_mm)
     };
     let (a, b) = (at(k), at(k + 1));
-    let e = (1.0 - mu_o).powi(5);
-    let fresnel = e + skin1_f0() * (1.0 - e);
+    let fresnel = schlick(mu_o as f64, SKIN1_ETA as f64) as f32;
     [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * (1.0 - fresnel))
 }
 
@@ -468,7 +468,7 @@ fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     let n = glam::Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
     let (v, l) = (glam::Vec3::Z, -glam::Vec3::Z);
     let flow = (n - l).normalize();
-    let inside = -refract(-v, n, 1.0 / SKIN1_ETA);
+    let inside = -(-v).refract(n, 1.0 / SKIN1_ETA);
     let want = skin1_transport_t(6.0 - 0.15, inside.dot(flow), n.dot(v)).map(|t| t * 0.5);
     assert_transmits(
         diffuse[32 * 64 + 32],
@@ -477,20 +477,13 @@ fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     );
 }
 
-/// GLSL's refract: `i` incident, `n` the normal against it, `eta` the index ratio.
-fn refract(i: glam::Vec3, n: glam::Vec3, eta: f32) -> glam::Vec3 {
-    let d = n.dot(i);
-    let k = 1.0 - eta * eta * (1.0 - d * d);
-    eta * i - (eta * d + k.sqrt()) * n
-}
-
 /// skin1's boundary (the Gaussian skin preset's measured medium): eta, Schlick's F0 and
 /// sigma_t per channel, 1/mm.
 const SKIN1_ETA: f32 = 1.3;
 const SKIN1_SIGMA_T: [f32; 3] = [0.772, 1.05, 1.49];
 
 fn skin1_f0() -> f32 {
-    ((SKIN1_ETA - 1.0) / (SKIN1_ETA + 1.0)).powi(2)
+    schlick(1.0, SKIN1_ETA as f64) as f32
 }
 
 /// A 1 mm slab of skin lit from straight behind (1024-texel shadow map), turned `yaw_deg`
