@@ -80,6 +80,12 @@ pub struct SettingsArgs {
     /// [default: render.transmittance.thickness_filter, 3].
     #[arg(long, value_name = "N")]
     pub thickness_filter: Option<u32>,
+    /// Diffusion: shadow-map taps (0..=32) gathering the light that enters the lit surface
+    /// around the light's chord and reaches the point through the medium, as behind a palm
+    /// beside the finger roots; 0 = the chord's slab alone
+    /// [default: render.transmittance.lateral_taps, 12].
+    #[arg(long, value_name = "N")]
+    pub lateral_taps: Option<u32>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
@@ -119,6 +125,7 @@ impl SettingsArgs {
         set!(self.texture_size, r.sss.texture_size);
         set!(self.transmittance, r.transmittance.method);
         set!(self.thickness_filter, r.transmittance.thickness_filter);
+        set!(self.lateral_taps, r.transmittance.lateral_taps);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
         if self.jitter {
             r.sss.jitter = true;

@@ -8,6 +8,8 @@
 //! * [`Dipole`], [`Multipole`], [`material`]: physically based profiles and the
 //!   measured materials of Jensen et al. 2001; [`fit_sum_of_gaussians`] turns any
 //!   of them into Gaussians (and so into a kernel and a `T(s)`).
+//! * [`lateral`]: light reaching a point from the lit surface around it (the `diffusion`
+//!   transmittance's lateral taps) and its CPU reference.
 //! * [`oracle`]: CPU references of the screen-space blur passes; [`specular`]: the skin
 //!   boundary's reflection that the lighting pass evaluates.
 //!
@@ -22,6 +24,7 @@ mod error;
 mod fit;
 mod gaussian;
 mod kernel;
+pub mod lateral;
 mod lut;
 mod materials;
 mod medium;

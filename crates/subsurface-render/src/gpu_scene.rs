@@ -95,7 +95,11 @@ pub fn object_uniform(
         extinction: optics.sigma_t,
         lut_range_mm,
         eta: optics.dipole.eta as f32,
-        _pad: [0.0; 3],
+        // 0 (no lateral taps) for a medium whose table holds no decay, one that passes nothing.
+        lateral_decay: Some(optics.transport.lateral_decay_per_mm())
+            .filter(|d| d.is_finite())
+            .map_or(0.0, |d| d as f32),
+        _pad: [0.0; 2],
         scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
     }
@@ -360,6 +364,7 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     uniform.transmittance = transmittance.method.code();
     uniform.normal_shrink = transmittance.normal_shrink;
     uniform.thickness_filter = transmittance.thickness_filter;
+    uniform.lateral_taps = transmittance.lateral_taps;
     uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {

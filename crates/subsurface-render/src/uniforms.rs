@@ -59,7 +59,9 @@ pub struct LightsUniform {
     /// 1 when subsurface scattering runs (any method but `none`): the diffuse light's shadow
     /// is looked up where the refracted light feeds the diffusion source.
     pub scattering: u32,
-    pub _pad: [u32; 3],
+    /// `diffusion`: shadow-map taps of the lit surface around the chord (0: the chord alone).
+    pub lateral_taps: u32,
+    pub _pad: [u32; 2],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -89,7 +91,10 @@ pub struct ObjectUniform {
     pub lut_range_mm: f32,
     /// Relative index of refraction of the medium's boundary (the ballistic transmission lobe).
     pub eta: f32,
-    pub _pad: [f32; 3],
+    /// The medium's slowest decay rate per mm, which spreads the lateral taps
+    /// (`subsurface_profile::TransportTable::lateral_decay_per_mm`).
+    pub lateral_decay: f32,
+    pub _pad: [f32; 2],
     /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
     pub scattering: [f32; 3],
     pub _pad2: f32,

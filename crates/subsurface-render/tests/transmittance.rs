@@ -456,10 +456,13 @@ fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     if context().is_none() {
         return;
     }
-    let s = backlit(
+    let mut s = backlit(
         "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.003 }\nrotation_deg = [0.0, 60.0, 0.0]",
         2048,
     );
+    // The chord's term alone: the lateral taps see the tilted plane 3 mm away across the slab
+    // and give E cos 60 x T(3 mm), 1.26x this (docs/fidelity.md, finding 6).
+    s.desc.render.transmittance.lateral_taps = 0;
     let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:
     // on a 60 degree slope that entry is 0.1 sin 60 tan 60 = 0.15 mm nearer. The camera sees
@@ -616,4 +619,114 @@ fn thin_slab_scatters_light_once_toward_the_camera() {
     // `paper` has no single scattering.
     let paper = specular(&s, TransmittanceMethod::Paper);
     assert!(paper[32 * 64 + 40][0].abs() < 1e-6);
+}
+
+/// A block of skin two thicknesses deep, lit from straight behind: 16 mm for x < 0 and 6 mm
+/// beyond (two slabs side by side, front faces at z = 0), seen head-on, 64 x 64 pixels over
+/// 106 mm. Light that crossed the thin part spreads under the thick part beside the step, as
+/// through a palm beside the finger roots; `diffusion`'s lateral taps gather it.
+fn stepped_block(lateral_taps: u32) -> Vec<[f32; 4]> {
+    let slab = |x: f32, thickness: f32| {
+        format!(
+            "[[objects]]\nmesh = {{ shape = \"slab\", width = 0.05, height = 0.05, thickness = {thickness:?} }}\ntranslation = [{x:?}, 0.0, {:?}]\nmm_per_unit = 1000.0\n[objects.material]\nalbedo = [1.0, 1.0, 1.0]\nspecular = 0.0\nmedium = \"skin\"\n",
+            -thickness / 2.0
+        )
+    };
+    let toml = format!(
+        "{}\n[render]\nambient = [0.0, 0.0, 0.0]\ntransmittance = {{ normal_shrink = 0.0001 }}\n{}\n{}\n{}",
+        camera_toml(0.3, 20.0, "near = 0.05\nfar = 2.0"),
+        common::light_toml(
+            "directional",
+            [0.0, 0.0, -1.0],
+            1.0,
+            "shadow_map_size = 2048\nshadow_bias = 0.00005"
+        ),
+        slab(-0.025, 0.016),
+        slab(0.025, 0.006),
+    );
+    let s = common::scene(&toml);
+    let ctx = context().unwrap();
+    let mut opts = options(&s, 64, 64);
+    opts.settings.sss.method = SssMethod::None;
+    opts.settings.transmittance.method = TransmittanceMethod::Diffusion;
+    opts.settings.transmittance.lateral_taps = lateral_taps;
+    let mut r = Renderer::new(&ctx, &s, opts).unwrap();
+    r.render().unwrap();
+    r.read_diffuse().unwrap()
+}
+
+/// The lateral taps against their CPU reference (`subsurface_profile::lateral`): beside the
+/// step the thick part shows the light of the lit surface around it, several times its own
+/// chord's slab; far from the step, the slab; without taps, the slab everywhere.
+#[test]
+fn light_crossing_a_thin_neighbour_spreads_under_a_thick_part() {
+    if context().is_none() {
+        return;
+    }
+    use subsurface_profile::lateral::{DEFAULT_LATERAL_TAPS, lateral_transmittance};
+    let table = subsurface_profile::slab_transport(
+        &subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap(),
+        subsurface_profile::TransmittanceLut::TRANSPORT_POINTS,
+        32.0,
+    )
+    .unwrap();
+    let sigma = table.lateral_decay_per_mm();
+    let with = stepped_block(DEFAULT_LATERAL_TAPS);
+    let without = stepped_block(0);
+    // The pixel's point on the front face (mm): 20 degrees over 64 pixels at 300 mm.
+    let half = 300.0 * 10f64.to_radians().tan();
+    let x_of = |i: usize| ((i as f64 + 0.5) / 32.0 - 1.0) * half;
+    let row = 32usize;
+    // Rows run down the image, y up the scene.
+    let y = -x_of(row);
+    let chord = 16.0;
+    let slab = skin1_transport_t(chord as f32, 1.0, 1.0);
+    for (i, near) in [(28usize, true), (10, false)] {
+        let x = x_of(i);
+        // The shader's frame across the light (0, 0, -1): t1 = +x, t2 = -y.
+        let lateral =
+            lateral_transmittance(&table, chord, sigma, DEFAULT_LATERAL_TAPS, |rho, phi| {
+                let (ex, ey) = (x + rho * phi.cos(), y - rho * phi.sin());
+                if ex.abs() >= 50.0 || ey.abs() >= 25.0 {
+                    return None;
+                }
+                let depth = if ex < 0.0 { 16.0 } else { 6.0 };
+                let r = ((ex - x).powi(2) + (ey - y).powi(2) + depth * depth).sqrt();
+                Some((r, (2.0 * depth / r).min(1.0)))
+            })
+            .unwrap();
+        let flux = table.multiple_at(chord);
+        let want: [f32; 3] =
+            std::array::from_fn(|c| slab[c] * (lateral[c] / flux[c]).max(1.0) as f32);
+        let got = with[row * 64 + i];
+        let plain = without[row * 64 + i];
+        assert!(
+            (got[0] / want[0] - 1.0).abs() < 0.05,
+            "pixel {i} ({x:.1} mm): red {} vs the CPU's {} (slab {})",
+            got[0],
+            want[0],
+            slab[0]
+        );
+        assert!(
+            (plain[0] / slab[0] - 1.0).abs() < 0.03,
+            "pixel {i}, no taps: red {} vs the slab's {}",
+            plain[0],
+            slab[0]
+        );
+        if near {
+            assert!(
+                got[0] > 2.0 * slab[0],
+                "beside the step: {} vs slab {}",
+                got[0],
+                slab[0]
+            );
+        } else {
+            assert!(
+                got[0] < 1.1 * slab[0],
+                "far from the step: {} vs slab {}",
+                got[0],
+                slab[0]
+            );
+        }
+    }
 }

@@ -240,6 +240,7 @@ mod tests {
                 method: TransmittanceMethod::Beer,
                 thickness_filter: 5,
                 normal_shrink: 0.0007,
+                lateral_taps: 7,
             },
             view: DebugView::Final,
         };

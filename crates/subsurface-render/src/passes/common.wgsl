@@ -40,7 +40,7 @@ struct Lights {
     ambient: vec3<f32>,
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
     scattering: u32,       // 1: subsurface scattering runs (source_shadow in lighting.wgsl)
-    _pad0: u32,
+    lateral_taps: u32,     // diffusion: shadow-map taps of the lit surface around the chord
     _pad1: u32,
     _pad2: u32,
     lights: array<Light, MAX_LIGHTS>,
@@ -62,6 +62,7 @@ struct Object {
     extinction: vec3<f32>, // Beer-Lambert sigma_t, 1/mm
     lut_range_mm: f32,     // thickness range of the T(s) LUT
     eta: f32,              // relative index of refraction of the boundary
+    lateral_decay: f32,    // the medium's slowest decay rate, 1/mm (spreads the lateral taps)
     scattering: vec3<f32>, // reduced scattering sigma_s', 1/mm (isotropic phase)
 };
 

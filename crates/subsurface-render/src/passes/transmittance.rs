@@ -13,7 +13,9 @@ pub use crate::settings::{TransmittanceMethod, TransmittanceSettings};
 /// sum-of-Gaussians T(s) of 000_* over the returned range in mm, then one row per exit direction
 /// of the `Diffusion` method's T(s), exact transport of multiply scattered light through slabs
 /// of the medium seen from that direction (`TransmittanceLut::transport_at`, exit cosines evenly
-/// spaced from grazing to the normal), over `TransmittanceLut::DIFFUSION_S_MAX_MM`.
+/// spaced from grazing to the normal), over `TransmittanceLut::DIFFUSION_S_MAX_MM`; then the
+/// three rows of the lateral taps over the same range: `T_ms(s)`, `-T_ms'(r)` and the rise of
+/// `T_ms` to its peak (`subsurface_profile::lateral`).
 pub fn lut_texture(
     ctx: &GpuContext,
     optics: &MaterialOptics,
@@ -24,6 +26,11 @@ pub fn lut_texture(
     for angle in 0..SlabSolver::EXIT_ANGLES {
         rows.push(TransmittanceLut::transport_at(&optics.transport, res, angle)?.to_rgba());
     }
+    // The lateral taps' rows (subsurface_profile::lateral): the slab's T_ms(s), the kernel's
+    // -T_ms'(r), and T_ms over its envelope.
+    rows.push(TransmittanceLut::transport(&optics.transport, res)?.to_rgba());
+    rows.push(TransmittanceLut::lateral_slope(&optics.transport, res)?.to_rgba());
+    rows.push(TransmittanceLut::rise(&optics.transport, res)?.to_rgba());
     let data: Vec<half::f16> = rows
         .iter()
         .flatten()

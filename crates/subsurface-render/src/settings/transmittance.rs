@@ -80,6 +80,11 @@ pub struct TransmittanceSettings {
     pub normal_shrink: f32,
     /// Width in texels (odd, 1..=15) of the shadow-map square averaged for thickness.
     pub thickness_filter: u32,
+    /// `diffusion`: shadow-map taps (0..=32) that gather the light entering the lit surface
+    /// around the chord through the medium (`subsurface_profile::lateral`); behind thick parts
+    /// beside thinner ones (a palm, the finger roots) most light comes that way. 0: the chord's
+    /// slab alone.
+    pub lateral_taps: u32,
 }
 
 impl Default for TransmittanceSettings {
@@ -88,6 +93,7 @@ impl Default for TransmittanceSettings {
             method: TransmittanceMethod::default(),
             normal_shrink: 0.005,
             thickness_filter: 3,
+            lateral_taps: subsurface_profile::lateral::DEFAULT_LATERAL_TAPS,
         }
     }
 }
@@ -105,6 +111,13 @@ impl TransmittanceSettings {
             return Err(InvalidSetting::new(
                 "thickness_filter",
                 format!("must be odd and in 1..=15 (got {f})"),
+            ));
+        }
+        let max = subsurface_profile::lateral::MAX_LATERAL_TAPS;
+        if self.lateral_taps > max {
+            return Err(InvalidSetting::new(
+                "lateral_taps",
+                format!("must be in 0..={max} (got {})", self.lateral_taps),
             ));
         }
         Ok(())

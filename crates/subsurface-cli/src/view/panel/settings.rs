@@ -62,6 +62,12 @@ fn thickness_filter_slider(ui: &mut Ui, n: &mut u32) -> bool {
     odd_slider(ui, n, 1, 15, "thickness filter")
 }
 
+fn lateral_taps_slider(ui: &mut Ui, n: &mut u32) -> bool {
+    let max = subsurface_profile::lateral::MAX_LATERAL_TAPS;
+    ui.add(Slider::new(n, 0..=max).text("lateral taps"))
+        .changed()
+}
+
 pub fn sss(ui: &mut Ui, m: &mut Model) {
     settings_section(ui, "Subsurface scattering", m, |ui, m| {
         side_settings(ui, "a", &mut m.state.a)
@@ -83,7 +89,8 @@ pub fn transmittance(ui: &mut Ui, m: &mut Model) {
                     .prefix("normal shrink "),
             )
             .changed();
-        changed | thickness_filter_slider(ui, &mut t.thickness_filter)
+        changed |= thickness_filter_slider(ui, &mut t.thickness_filter);
+        changed | lateral_taps_slider(ui, &mut t.lateral_taps)
     });
 }
 
@@ -137,6 +144,7 @@ pub fn compare(ui: &mut Ui, m: &mut Model) {
                 transmittance_combo(ui, "b transmittance", &mut b.transmittance.method)
             });
             changed |= thickness_filter_slider(ui, &mut b.transmittance.thickness_filter);
+            changed |= lateral_taps_slider(ui, &mut b.transmittance.lateral_taps);
             changed |= labelled(ui, "debug view", |ui| view_combo(ui, "b view", &mut b.view));
             ui.add(Slider::new(&mut m.state.split, 0.0..=1.0).text("divider"));
         }
