@@ -430,11 +430,7 @@ fn backlit_slab_transmits_the_exact_slab_transmittance() {
 /// times 1 - F of the crossing at exit cosine `mu_o` (Schlick, F0 of eta 1.3).
 fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
     use subsurface_profile::{SlabSolver, TransmittanceLut};
-    let skin1 =
-        subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
-    let table =
-        subsurface_profile::slab_transport(&skin1, TransmittanceLut::TRANSPORT_POINTS, 32.0)
-            .unwrap();
+    let table = skin1_table();
     let row = c.clamp(0.0, 1.0) * (SlabSolver::EXIT_ANGLES - 1) as f32;
     let k = (row.floor() as usize).min(SlabSolver::EXIT_ANGLES - 2);
     let f = row - k as f32;
@@ -446,6 +442,19 @@ fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
     let (a, b) = (at(k), at(k + 1));
     let fresnel = schlick(mu_o as f64, SKIN1_ETA as f64) as f32;
     [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * (1.0 - fresnel))
+}
+
+/// Exact transport through slabs of skin1 (the Gaussian skin preset's medium), as the renderer
+/// tabulates it.
+fn skin1_table() -> subsurface_profile::TransportTable {
+    let skin1 =
+        subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
+    subsurface_profile::slab_transport(
+        &skin1,
+        subsurface_profile::TransmittanceLut::TRANSPORT_POINTS,
+        32.0,
+    )
+    .unwrap()
 }
 
 /// `diffusion` lights the back by the entry face's own irradiance, E cos(theta), from the normal
@@ -664,12 +673,7 @@ fn light_crossing_a_thin_neighbour_spreads_under_a_thick_part() {
         return;
     }
     use subsurface_profile::lateral::{DEFAULT_LATERAL_TAPS, lateral_transmittance};
-    let table = subsurface_profile::slab_transport(
-        &subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap(),
-        subsurface_profile::TransmittanceLut::TRANSPORT_POINTS,
-        32.0,
-    )
-    .unwrap();
+    let table = skin1_table();
     let sigma = table.lateral_decay_per_mm();
     let with = stepped_block(DEFAULT_LATERAL_TAPS);
     let without = stepped_block(0);
