@@ -57,6 +57,11 @@ pub struct BenchArgs {
         value_name = "METHOD,.."
     )]
     pub transmittance: Vec<TransmittanceMethod>,
+    /// Diffusion runs: numbers of lateral shadow-map taps (0..=32), comma-separated, e.g. 0,12
+    /// for what gathering the light around the chord costs against the chord's slab alone
+    /// [default: the scene's render.transmittance.lateral_taps].
+    #[arg(long, value_delimiter = ',', value_name = "N,..")]
+    pub lateral_taps: Vec<u32>,
     /// Numbers of distinct diffusion profiles on screen, comma-separated: the objects (with
     /// --characters, the copies) take the material presets in turn, so the cost of a profile
     /// per material shows beside one profile for all.
@@ -133,6 +138,9 @@ struct Run {
     /// How the screen-space passes fetched their texels (`packed`, `workgroup`, `direct`).
     fetch: &'static str,
     transmittance: String,
+    /// Diffusion runs: the lateral shadow-map taps per shadowed light.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lateral_taps: Option<u32>,
     /// Sum of the median per-pass GPU times (copy baseline excluded).
     frame_ms: f64,
     passes: Vec<PassTiming>,
@@ -151,6 +159,27 @@ struct Run {
     flip_vs_fixed_skin: Option<f64>,
     /// Bytes the modelled passes must move (passes::traffic), with the measured time.
     traffic: Vec<Traffic>,
+}
+
+impl Run {
+    /// The transmittance as the table names it: `diffusion/12` for diffusion with 12 lateral
+    /// taps, so that `--lateral-taps 0,12` shows two rows.
+    fn transmittance_label(&self) -> String {
+        match self.lateral_taps {
+            Some(taps) => format!("{}/{taps}", self.transmittance),
+            None => self.transmittance.clone(),
+        }
+    }
+}
+
+/// The lateral tap counts a transmittance method is measured at: `--lateral-taps` for
+/// diffusion (the scene's own when empty), nothing to vary for the others.
+fn lateral_counts(tm: TransmittanceMethod, taps: &[u32]) -> Vec<Option<u32>> {
+    if tm == TransmittanceMethod::Diffusion && !taps.is_empty() {
+        taps.iter().map(|t| Some(*t)).collect()
+    } else {
+        vec![None]
+    }
 }
 
 #[derive(Serialize)]
@@ -285,13 +314,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(n) = light_counts.iter().find(|n| **n > all_lights) {
         anyhow::bail!("--lights: {n} is more than the scene's {all_lights} lights");
     }
+    let max_taps = subsurface_profile::lateral::MAX_LATERAL_TAPS;
+    if let Some(t) = args.lateral_taps.iter().find(|t| **t > max_taps) {
+        anyhow::bail!("--lateral-taps: must be in 0..={max_taps} (got {t})");
+    }
     let configs = sizes.len()
         * light_counts.len()
         * args.characters.len()
         * args.profiles.len()
         * args.sss.len()
         * args.fetch.len()
-        * args.transmittance.len();
+        * args
+            .transmittance
+            .iter()
+            .map(|tm| lateral_counts(*tm, &args.lateral_taps).len())
+            .sum::<usize>();
     let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
         .with_style(
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
@@ -320,10 +357,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 fetches.into_iter().map(move |f| (*m, f))
             });
             for (method, fetch) in methods {
-                for &tm in &args.transmittance {
+                let transmittances = args.transmittance.iter().flat_map(|tm| {
+                    lateral_counts(*tm, &args.lateral_taps)
+                        .into_iter()
+                        .map(move |taps| (*tm, taps))
+                });
+                for (tm, taps) in transmittances {
                     bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
                     let mut opts = RenderOptions::from_scene(&scene);
                     let s = &mut opts.settings;
+                    if let Some(taps) = taps {
+                        s.transmittance.lateral_taps = taps;
+                    }
                     (s.width, s.height) = (w, h);
                     s.sss.method = method;
                     s.sss.samples = args.samples;
@@ -343,6 +388,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         bar.inc(1);
                     }
                     let mut run = summarise(samples, n, w, h, method, tm);
+                    run.lateral_taps = (tm == TransmittanceMethod::Diffusion)
+                        .then_some(opts.settings.transmittance.lateral_taps);
                     run.profiles = renderer.profile_table().kernels.len() as u32;
                     run.lights = lights;
                     (run.samples, run.jitter) = (args.samples, args.jitter);
@@ -438,6 +485,7 @@ fn summarise(
         sss: method.name(),
         fetch: "",
         transmittance: tm.name().to_string(),
+        lateral_taps: None,
         frame_ms,
         passes,
         copy_ms,
@@ -481,7 +529,7 @@ fn table(report: &Report) -> String {
             format!("{}x{}", r.width, r.height),
             r.sss,
             r.fetch,
-            r.transmittance,
+            r.transmittance_label(),
             r.frame_ms,
             p("shadow"),
             p("lighting"),
@@ -513,7 +561,7 @@ fn per_light(report: &Report) -> String {
     let same = |a: &Run, b: &Run| {
         (a.characters, a.profiles, a.width, a.height, a.sss, a.fetch)
             == (b.characters, b.profiles, b.width, b.height, b.sss, b.fetch)
-            && a.transmittance == b.transmittance
+            && (&a.transmittance, a.lateral_taps) == (&b.transmittance, b.lateral_taps)
     };
     let pass = |r: &Run, n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
     for (i, r) in report.runs.iter().enumerate() {
@@ -542,7 +590,7 @@ fn per_light(report: &Report) -> String {
             "{:>10} {:>10} {:>10} lights {}..{}: lighting {:.3} ms, shadow {:.3} ms per light\n",
             format!("{}x{}", r.width, r.height),
             r.sss,
-            r.transmittance,
+            r.transmittance_label(),
             fewest.lights,
             most.lights,
             slope("lighting"),
@@ -591,7 +639,7 @@ fn draw(root: &plot::Area, report: &Report) -> plot::DrawResult {
         .draw()?;
     let mut keys: Vec<(&str, String, u32, u32)> = Vec::new();
     for r in &report.runs {
-        let k = (r.sss, r.transmittance.clone(), r.width, r.height);
+        let k = (r.sss, r.transmittance_label(), r.width, r.height);
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -601,7 +649,9 @@ fn draw(root: &plot::Area, report: &Report) -> plot::DrawResult {
         let pts: Vec<&Run> = report
             .runs
             .iter()
-            .filter(|r| r.sss == *sss && &r.transmittance == tm && r.width == *w && r.height == *h)
+            .filter(|r| {
+                r.sss == *sss && &r.transmittance_label() == tm && r.width == *w && r.height == *h
+            })
             .collect();
         let frame = pts.iter().map(|r| (r.characters as f64, r.frame_ms));
         plot::line(&mut chart, frame, colour, format!("{sss} {tm} {w}x{h}"))?;

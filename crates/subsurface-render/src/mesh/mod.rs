@@ -11,6 +11,7 @@ mod gltf_check;
 mod gltf_read;
 mod shapes;
 mod tangents;
+mod tessellate;
 
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
@@ -19,6 +20,7 @@ pub use self::gltf_check::{
     MAX_BUFFER_BYTES, MAX_GLTF_INDICES, MAX_GLTF_VERTICES, MAX_NODE_DEPTH, MAX_NODE_INSTANCES,
     MAX_PRIMITIVE_INSTANCES,
 };
+pub use self::tessellate::MAX_TESSELLATION;
 
 /// One vertex as uploaded to the GPU (48 bytes).
 #[repr(C)]

@@ -136,6 +136,25 @@ fn load_object(
             segments,
         } => Mesh::cylinder(*radius, *length, *segments),
     };
+    let mesh = if o.tessellate > 1 {
+        let triangles = mesh.triangle_count() * (o.tessellate * o.tessellate) as usize;
+        if triangles * 3 > mesh::MAX_GLTF_INDICES {
+            return Err(SceneError::Invalid {
+                file: file.to_string(),
+                field: format!("objects[{index}].tessellate"),
+                msg: format!(
+                    "{} triangles tessellated {}x{} make {triangles}, more than {}",
+                    mesh.triangle_count(),
+                    o.tessellate,
+                    o.tessellate,
+                    mesh::MAX_GLTF_INDICES / 3
+                ),
+            });
+        }
+        mesh.phong_tessellate(o.tessellate)
+    } else {
+        mesh
+    };
     let tex = |field: &str, p: &Option<String>| -> Result<Option<image::RgbaImage>, SceneError> {
         p.as_ref()
             .map(|p| load_image(&base_dir.join(p)).map_err(|e| ctx(field, e)))

@@ -43,6 +43,7 @@ impl Scene {
             translation: [0.0; 3],
             rotation_deg: [0.0; 3],
             scale: 1.0,
+            tessellate: 1,
             material: material.clone(),
         };
         let object = Object {

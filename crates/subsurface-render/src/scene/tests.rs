@@ -349,6 +349,8 @@ fn invalid_objects() {
     );
     obj("mm_per_unit = 0.0", "objects[0].mm_per_unit");
     obj("scale = 0.0", "objects[0].scale");
+    obj("tessellate = 0", "objects[0].tessellate");
+    obj("tessellate = 9", "objects[0].tessellate");
     mesh(
         r#"{ shape = "slab", width = 0, height = 1, thickness = 1 }"#,
         "objects[0].mesh.width",
@@ -382,6 +384,57 @@ fn invalid_objects() {
         "objects[0].mesh.segments",
     );
     mesh(r#"{ gltf = "" }"#, "objects[0].mesh.gltf");
+}
+
+/// `tessellate = N` gives the object N x N triangles per authored one, pulled out onto the
+/// surface its normals describe (a coarse sphere's triangles move outward, none inward).
+#[test]
+fn tessellate_splits_and_rounds_the_mesh() {
+    let load = |more: &str| {
+        let s = MINIMAL.replace(
+            "mesh = { shape = \"slab\", width = 0.1, height = 0.1, thickness = 0.01 }",
+            &format!("mesh = {{ shape = \"sphere\", radius = 1.0, segments = 8 }}\n{more}"),
+        );
+        Scene::from_desc(parse(&s).unwrap(), Path::new("."), "t.toml").unwrap()
+    };
+    let flat = load("");
+    let round = load("tessellate = 3");
+    let (f, r) = (&flat.objects[0].mesh, &round.objects[0].mesh);
+    assert_eq!(r.triangle_count(), f.triangle_count() * 9);
+    let mean_radius = |m: &crate::mesh::Mesh| {
+        m.vertices
+            .iter()
+            .map(|v| glam::Vec3::from(v.position).length())
+            .sum::<f32>()
+            / m.vertices.len() as f32
+    };
+    assert!(
+        mean_radius(f) > 0.999,
+        "the authored vertices are on the sphere"
+    );
+    let new_points = r.vertices.len() - f.vertices.len();
+    assert!(new_points > 0);
+    assert!(
+        mean_radius(r) > 0.97,
+        "tessellated points near the sphere: {}",
+        mean_radius(r)
+    );
+    // Flat, the same points would be on the facets, some well inside.
+    let flat_mid = f
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            t.iter()
+                .map(|i| glam::Vec3::from(f.vertices[*i as usize].position))
+                .sum::<glam::Vec3>()
+                .length()
+                / 3.0
+        })
+        .fold(f32::INFINITY, f32::min);
+    assert!(flat_mid < 0.9, "{flat_mid}");
+    // The default scene rounds its low-poly hand.
+    let d = Scene::default_scene();
+    assert_eq!(d.desc.objects[0].tessellate, 3);
 }
 
 /// Each number is valid, but the object in world space does not fit in f32: rejected when the
@@ -606,6 +659,7 @@ fn euler_convention() {
         translation: [1.0, 2.0, 3.0],
         rotation_deg: [0.0, 90.0, 0.0],
         scale: 2.0,
+        tessellate: 1,
         material: MaterialDesc::default(),
     };
     // +x rotated 90 deg about y -> -z, scaled by 2, translated.

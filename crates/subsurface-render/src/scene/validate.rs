@@ -227,6 +227,13 @@ impl SceneDesc {
                     format!("must be in 3..=1024 (got {segments})"),
                 ));
             }
+            let max = crate::mesh::MAX_TESSELLATION;
+            if !(1..=max).contains(&o.tessellate) {
+                return Err(c.err(
+                    f("tessellate"),
+                    format!("must be in 1..={max} (got {})", o.tessellate),
+                ));
+            }
             c.positive(&f("mm_per_unit"), o.mm_per_unit)?;
             c.finite3(&f("translation"), o.translation)?;
             c.finite3(&f("rotation_deg"), o.rotation_deg)?;
