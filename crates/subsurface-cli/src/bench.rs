@@ -314,9 +314,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(n) = light_counts.iter().find(|n| **n > all_lights) {
         anyhow::bail!("--lights: {n} is more than the scene's {all_lights} lights");
     }
-    let max_taps = subsurface_profile::lateral::MAX_LATERAL_TAPS;
-    if let Some(t) = args.lateral_taps.iter().find(|t| **t > max_taps) {
-        anyhow::bail!("--lateral-taps: must be in 0..={max_taps} (got {t})");
+    for &lateral_taps in &args.lateral_taps {
+        let taps = subsurface_render::TransmittanceSettings {
+            lateral_taps,
+            ..Default::default()
+        };
+        taps.validate()
+            .map_err(|e| anyhow::anyhow!("--lateral-taps: {}", e.message))?;
     }
     let configs = sizes.len()
         * light_counts.len()

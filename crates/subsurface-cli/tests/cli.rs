@@ -69,6 +69,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         (&["kernel", "--samples", "64", "--json"], "samples"),
         (&["bench", "--bandwidth", "0"], "--bandwidth"),
         (&["bench", "--flip-vs", "8"], "--flip-vs"),
+        (&["bench", "--lateral-taps", "0,33"], "--lateral-taps"),
     ];
     for (args, needle) in cases {
         let out = subsurface(args, &dir);
@@ -134,6 +135,40 @@ fn bench_json_has_runs_with_positive_times() {
             .unwrap()
             .iter()
             .any(|p| p["name"] == "sss")
+    );
+}
+
+/// `--lateral-taps 0,12` measures `diffusion` at both counts; the other methods once.
+#[test]
+fn bench_measures_diffusion_at_each_lateral_tap_count() {
+    let args = small_bench(&[
+        "--sss",
+        "none",
+        "--transmittance",
+        "paper,diffusion",
+        "--lateral-taps",
+        "0,12",
+    ]);
+    let Some((_, out)) = run_with_gpu("bench", &args) else {
+        return;
+    };
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let runs: Vec<(String, Option<u64>)> = v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let tm = r["transmittance"].as_str().unwrap().to_string();
+            (tm, r["lateral_taps"].as_u64())
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            ("paper".to_string(), None),
+            ("diffusion".to_string(), Some(0)),
+            ("diffusion".to_string(), Some(12)),
+        ]
     );
 }
 

@@ -55,7 +55,7 @@ impl Mesh {
         // straight (a slab stays flat). Every other edge, and every triangle's inside, is
         // curved by its own vertices' normals, which also shade it.
         let pos = |i: u32| self.vertices[i as usize].position.map(f32::to_bits);
-        let mut copies: HashMap<[u32; 3], Vec<Vec3>> = HashMap::new();
+        let mut copies: HashMap<PositionBits, Vec<Vec3>> = HashMap::new();
         for v in &self.vertices {
             copies
                 .entry(v.position.map(f32::to_bits))
