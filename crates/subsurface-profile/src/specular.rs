@@ -14,6 +14,8 @@
 //! radiance is `albedo x irradiance`), so [`beckmann`] is pi times the normalised
 //! distribution and [`boundary_reflection`] is pi times `f_r cos(theta_l)`.
 
+use std::f64::consts::PI;
+
 /// Beckmann's distribution of facet normals at cosine `cos_h` to the normal, times pi
 /// (`exp(-tan^2 / alpha^2) / (alpha^2 cos^4)`).
 pub fn beckmann(cos_h: f64, alpha: f64) -> f64 {
@@ -55,6 +57,78 @@ pub fn boundary_reflection(n: [f64; 3], l: [f64; 3], v: [f64; 3], alpha: f64, et
     let h = h.map(|x| x / len);
     let g = beckmann_smith_g1(nv, alpha) * beckmann_smith_g1(nl, alpha);
     beckmann(dot(n, h).max(0.0), alpha) * schlick(dot(v, h), eta) * g / (4.0 * nv)
+}
+
+/// The share of a collimated beam arriving from outside at cosine `cos_theta` to the normal
+/// that the rough boundary (Beckmann facets of slope `alpha`, index `eta` inside) lets into
+/// the medium: Walter et al. 2007's microfacet transmission, as Mitsuba's `roughdielectric`
+/// evaluates it (Smith's masking of both directions, each facet's exact dielectric Fresnel),
+/// integrated over the facets the beam sees. By reciprocity it is also what leaves toward
+/// `cos_theta` of light arriving at the boundary from inside evenly from every direction, so
+/// it replaces a smooth boundary's `1 - F` wherever multiply scattered light enters or leaves.
+///
+/// Unlike `1 - F` it stays high at grazing: facets tilted toward a grazing direction see it
+/// far less obliquely. For `alpha` 0.3 and `eta` 1.3 it is 0.73 at 89 degrees, where a smooth
+/// boundary passes 0.05; at the rim of a backlit finger, where the camera grazes the surface,
+/// that is most of the light that leaves.
+pub fn rough_transmittance(cos_theta: f64, alpha: f64, eta: f64) -> f64 {
+    // Held off exact grazing, where G1 (clamped at 1e-4 in [`beckmann_smith_g1`]) / mu loses
+    // its limit.
+    let mu = cos_theta.clamp(1e-3, 1.0);
+    let wi = [(1.0 - mu * mu).sqrt(), 0.0, mu];
+    // Slopes (x, y) of the facets, m = (-x, -y, 1) / |.|, Beckmann-distributed with density
+    // exp(-(x^2 + y^2) / alpha^2) / (pi alpha^2); the beam meets a facet in proportion to
+    // wi . (-x, -y, 1) (its projected area toward the beam, per unit of the surface's
+    // projected area), which over all slopes integrates to mu / G1(mu), hence the factor in
+    // front. A midpoint grid of 4 alpha either way leaves out e^-16 of the facets.
+    let n = 96;
+    let half = 4.0 * alpha;
+    let h = 2.0 * half / n as f64;
+    let mut sum = 0.0;
+    for i in 0..n {
+        let x = -half + (i as f64 + 0.5) * h;
+        for j in 0..n {
+            let y = -half + (j as f64 + 0.5) * h;
+            let facing = wi[0] * -x + wi[2];
+            if facing <= 0.0 {
+                continue;
+            }
+            let density = (-(x * x + y * y) / (alpha * alpha)).exp() / (PI * alpha * alpha);
+            let len = (x * x + y * y + 1.0).sqrt();
+            let m = [-x / len, -y / len, 1.0 / len];
+            let c = dot(wi, m);
+            // Snell's law across the facet, into the denser side.
+            let sin2 = (1.0 - c * c) / (eta * eta);
+            let ct = (1.0 - sin2).sqrt();
+            let t = [0, 1, 2].map(|k| -wi[k] / eta + (c / eta - ct) * m[k]);
+            // The refracted ray must leave the facet downward and go below the surface.
+            if t[2] >= 0.0 {
+                continue;
+            }
+            let f = crate::transport::fresnel_inside(1.0 / eta, c);
+            sum += density * facing * (1.0 - f) * beckmann_smith_g1(-t[2], alpha);
+        }
+    }
+    sum * h * h * beckmann_smith_g1(mu, alpha) / mu
+}
+
+/// [`rough_transmittance`] at `resolution` evenly spaced cosines from 0 to 1, for the GPU (a
+/// row of the transmittance LUT): computed at 65 of them and interpolated linearly between
+/// (the curve is smooth; its largest step between nodes is under 0.01).
+pub fn rough_transmittance_row(alpha: f64, eta: f64, resolution: u32) -> Vec<f32> {
+    const NODES: usize = 65;
+    let nodes: Vec<f64> = (0..NODES)
+        .map(|i| rough_transmittance(i as f64 / (NODES - 1) as f64, alpha, eta))
+        .collect();
+    let last = f64::from(resolution.max(2) - 1);
+    (0..resolution.max(2))
+        .map(|i| {
+            let x = f64::from(i) / last * (NODES - 1) as f64;
+            let k = (x.floor() as usize).min(NODES - 2);
+            let f = x - k as f64;
+            (nodes[k] * (1.0 - f) + nodes[k + 1] * f) as f32
+        })
+        .collect()
 }
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -159,6 +233,53 @@ mod tests {
         let v = dir(87f64.to_radians(), PI);
         let (ours, theirs) = (boundary_reflection(n, l, v, ALPHA, ETA), ks(n, l, v));
         assert!(theirs > 4.0 * ours, "{ours} vs {theirs}");
+    }
+
+    #[test]
+    fn the_rough_boundary_lets_in_what_mitsuba_lets_in() {
+        // Mitsuba 3.9's `roughdielectric` (Beckmann, int_ior 1.3), its sampling routine run
+        // 200 000 times per direction from outside (scalar_rgb): the mean weight of the
+        // transmitted samples times eta^2 (Mitsuba scales transmitted radiance by 1 / eta^2).
+        for (alpha, mu, mitsuba) in [
+            (0.3, 1.0, 0.9826),
+            (0.3, 0.5, 0.9358),
+            (0.3, 0.2, 0.8265),
+            (0.3, 0.1, 0.7767),
+            (0.3, 0.02, 0.7328),
+            (0.1, 0.5, 0.9445),
+            (0.1, 0.2, 0.731),
+            (0.1, 0.1, 0.5695),
+            (0.1, 0.02, 0.4353),
+        ] {
+            let ours = rough_transmittance(mu, alpha, ETA);
+            assert!(
+                (ours - mitsuba).abs() < 0.01,
+                "alpha {alpha}, cos {mu}: {ours} vs Mitsuba's {mitsuba}"
+            );
+        }
+        // A smooth boundary's limit is 1 - F, exact Fresnel.
+        for mu in [1.0, 0.5, 0.2] {
+            let smooth = 1.0 - crate::transport::fresnel_inside(1.0 / ETA, mu);
+            let ours = rough_transmittance(mu, 1e-3, ETA);
+            assert!((ours - smooth).abs() < 2e-3, "cos {mu}: {ours} vs {smooth}");
+        }
+        // The GPU's row holds the same curve.
+        let row = rough_transmittance_row(ALPHA, ETA, 2048);
+        for (i, mu) in [(0usize, 0.0), (1023, 1023.0 / 2047.0), (2047, 1.0)] {
+            let exact = rough_transmittance(mu, ALPHA, ETA);
+            assert!(
+                (f64::from(row[i]) - exact).abs() < 1e-3,
+                "{mu}: {} vs {exact}",
+                row[i]
+            );
+        }
+        // Never more than arrives, and less toward grazing.
+        let mut last = 1.0;
+        for i in 0..=20 {
+            let t = rough_transmittance(1.0 - i as f64 / 20.0, ALPHA, ETA);
+            assert!(t <= last + 1e-9 && t > 0.0, "{i}: {t}");
+            last = t;
+        }
     }
 
     #[test]

@@ -172,6 +172,12 @@ fn upload_texture(
 }
 
 /// `profile_rows`: each scene object's row in the screen-space profile table.
+/// What an object's T(s) LUT depends on: its medium, and its boundary's roughness (the LUT's
+/// last row, the rough boundary's transmittance). Objects with equal keys share one LUT.
+pub fn lut_key(material: &crate::scene::MaterialDesc) -> String {
+    format!("{}|{}", material.medium, material.roughness)
+}
+
 pub fn upload_objects(
     ctx: &GpuContext,
     scene: &Scene,
@@ -214,9 +220,12 @@ pub fn upload_objects(
             usage: wgpu::BufferUsages::INDEX,
         });
         let optics = materials.get(&object.material.medium, &format!("{label}.material.medium"))?;
-        let key = object.material.medium.to_string();
+        let key = lut_key(&object.material);
         if !luts.contains_key(&key) {
-            luts.insert(key.clone(), lut_texture(ctx, &optics)?);
+            luts.insert(
+                key.clone(),
+                lut_texture(ctx, &optics, object.material.roughness)?,
+            );
         }
         let (lut, lut_range) = &luts[&key];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -78,6 +78,7 @@ pub struct Renderer {
     far: f32,
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
+    /// Each object's LUT key (`gpu_scene::lut_key`): a change re-uploads the objects.
     material_names: Vec<String>,
     /// The screen-space profile table and each object's row in it.
     profiles: ProfileTable,
@@ -268,7 +269,7 @@ impl Renderer {
             material_names: scene
                 .objects
                 .iter()
-                .map(|o| o.material.medium.to_string())
+                .map(|o| gpu_scene::lut_key(&o.material))
                 .collect(),
             profiles,
             maps_layout,
@@ -295,7 +296,7 @@ impl Renderer {
         let names: Vec<String> = scene
             .objects
             .iter()
-            .map(|o| o.material.medium.to_string())
+            .map(|o| gpu_scene::lut_key(&o.material))
             .collect();
         let profiles = profile_table(scene, options)?;
         let new_profiles = profiles.kernels != self.profiles.kernels;

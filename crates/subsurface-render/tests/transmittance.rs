@@ -5,7 +5,7 @@ mod common;
 
 use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
-use subsurface_profile::specular::schlick;
+use subsurface_profile::specular::{rough_transmittance, schlick};
 use subsurface_render::SssMethod;
 use subsurface_render::TransmittanceMethod;
 use subsurface_render::{DebugView, Renderer, Scene};
@@ -427,7 +427,8 @@ fn backlit_slab_transmits_the_exact_slab_transmittance() {
 /// What `diffusion` sends toward the camera through `s_mm` of skin1 (the Gaussian skin
 /// preset's medium), by the CPU: exact transport's T_ms / albedo with the slab's angular shape
 /// at cosine `c` to the flow (the table's rows, blended as the GPU's filter blends them),
-/// times 1 - F of the crossing at exit cosine `mu_o` (Schlick, F0 of eta 1.3).
+/// times what the rough boundary (roughness 0.3, the material's default; eta 1.3) lets out at
+/// exit cosine `mu_o`.
 fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
     use subsurface_profile::{SlabSolver, TransmittanceLut};
     let table = skin1_table();
@@ -440,8 +441,13 @@ fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
             .sample(s_mm)
     };
     let (a, b) = (at(k), at(k + 1));
-    let fresnel = schlick(mu_o as f64, SKIN1_ETA as f64) as f32;
-    [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * (1.0 - fresnel))
+    let out = boundary_t(mu_o);
+    [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * out)
+}
+
+/// The rough boundary's transmittance at cosine `mu` (roughness 0.3, eta 1.3).
+fn boundary_t(mu: f32) -> f32 {
+    rough_transmittance(mu as f64, 0.3, SKIN1_ETA as f64) as f32
 }
 
 /// Exact transport through slabs of skin1 (the Gaussian skin preset's medium), as the renderer
@@ -458,34 +464,64 @@ fn skin1_table() -> subsurface_profile::TransportTable {
 }
 
 /// `diffusion` lights the back by the entry face's own irradiance, E cos(theta), from the normal
-/// the shadow map stores: a 3 mm slab turned 60 degrees to the light receives E / 2 and is
-/// crossed along a 6 mm chord (000_*'s wrapped front normal would give 0.3 + 0.5).
+/// the shadow map stores, times what the rough boundary lets in at that angle over what it
+/// lets in head-on (the slab's T(s) is solved for light at normal incidence): a 3 mm slab
+/// turned 60 degrees to the light receives E / 2 x 0.95 and is crossed along a 6 mm chord
+/// (000_*'s wrapped front normal would give 0.3 + 0.5). The camera sees the face at the same
+/// angle, and the light leaves through the rough boundary too.
 #[test]
 fn diffusion_lights_the_back_by_the_entry_face_irradiance() {
     if context().is_none() {
         return;
     }
+    tilted_slab_transmits(60.0, 3.0);
+}
+
+/// Toward grazing, the rough boundary lets light in and out where a smooth one would not: a
+/// 1 mm slab turned 80 degrees, seen at 80 degrees, leaves 0.81 of the transmitted light where
+/// a smooth boundary's 1 - F (Schlick) would leave 0.61, and lets in 0.83 of normal
+/// incidence's light (a smooth boundary 0.62).
+#[test]
+fn diffusion_passes_the_rough_boundary_at_grazing_angles() {
+    if context().is_none() {
+        return;
+    }
+    assert!(
+        boundary_t(80f32.to_radians().cos())
+            > 1.25 * (1.0 - schlick(80f64.to_radians().cos(), 1.3) as f32)
+    );
+    tilted_slab_transmits(80.0, 1.0);
+}
+
+/// A slab `thickness_mm` thick, turned `yaw_deg` about the vertical axis, lit from straight
+/// behind and seen from straight in front: its centre pixel against the CPU's chord slab.
+fn tilted_slab_transmits(yaw_deg: f32, thickness_mm: f32) {
     let mut s = backlit(
-        "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.003 }\nrotation_deg = [0.0, 60.0, 0.0]",
+        &format!(
+            "{{ shape = \"slab\", width = 0.05, height = 0.05, thickness = {} }}\nrotation_deg = [0.0, {yaw_deg}, 0.0]",
+            thickness_mm / 1000.0
+        ),
         2048,
     );
-    // The chord's term alone: the lateral taps see the tilted plane 3 mm away across the slab
-    // and give E cos 60 x T(3 mm), 1.26x this (docs/fidelity.md, finding 6).
+    // The chord's term alone: the lateral taps see the tilted plane `thickness_mm` away across
+    // the slab and give more (docs/fidelity.md, finding 6).
     s.desc.render.transmittance.lateral_taps = 0;
     let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:
-    // on a 60 degree slope that entry is 0.1 sin 60 tan 60 = 0.15 mm nearer. The camera sees
-    // the face at 60 degrees; the light flows halfway between the face's normal and the
-    // light's direction inside.
-    let n = glam::Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+    // on a slope of angle a that entry is 0.1 sin a tan a nearer. The light flows halfway
+    // between the face's normal and the light's direction inside.
+    let a = yaw_deg.to_radians();
+    let n = glam::Vec3::new(a.sin(), 0.0, a.cos());
     let (v, l) = (glam::Vec3::Z, -glam::Vec3::Z);
     let flow = (n - l).normalize();
     let inside = -(-v).refract(n, 1.0 / SKIN1_ETA);
-    let want = skin1_transport_t(6.0 - 0.15, inside.dot(flow), n.dot(v)).map(|t| t * 0.5);
+    let chord = thickness_mm / a.cos() - SHRINK * 1000.0 * a.sin() * a.tan();
+    let entry = a.cos() * boundary_t(a.cos()) / boundary_t(1.0);
+    let want = skin1_transport_t(chord, inside.dot(flow), n.dot(v)).map(|t| t * entry);
     assert_transmits(
         diffuse[32 * 64 + 32],
         want,
-        "E cos 60 x T(6 mm) toward the camera",
+        &format!("E cos {yaw_deg} x T({chord:.2} mm) toward the camera"),
     );
 }
 
