@@ -73,7 +73,7 @@ fn profile_transmittance(s_mm: f32) -> vec3<f32> {
 // this stays near 0.73 for roughness 0.3, because facets tilted toward a grazing direction see
 // it less obliquely. Where the camera grazes a backlit rim that is most of the light leaving:
 // with the smooth 1 - F the finger proxy's light-side outline read -25 % against the path
-// tracer, with this -17 %.
+// tracer, with this -14 % (docs/fidelity.md, finding 8).
 fn boundary_transmittance(mu: f32) -> f32 {
     return lut_row(clamp(mu, 0.0, 1.0), 1.0, BOUNDARY_ROW).r;
 }
@@ -88,9 +88,9 @@ fn diffusion_transmittance(s_mm: f32, c: f32) -> vec3<f32> {
 
 // The factor of the transmitted light's Lambertian radiance that leaves toward the camera:
 // inside, the slab's angular shape around the direction `flow` the light moves in, then what
-// the rough boundary at the shaded point lets out toward the camera. In a slab the light flows along the normal; through a
-// backlit sphere or finger it flows along the light, which at the rim runs along the surface
-// toward the camera. `flow` is taken halfway between the two, normalize(n - l): against
+// the rough boundary at the shaded point lets out toward the camera. In a slab the light flows
+// along the normal; through a backlit sphere or finger it flows along the light, which at the
+// rim runs along the surface toward the camera. `flow` is taken halfway between the two, normalize(n - l): against
 // path-traced 20 mm spheres and 14 mm cylinders lit from behind (one channel at a time) the
 // normal alone left the rims 17-19 % dark, the light's direction alone made them 22 % bright,
 // and the halfway direction is within 6 % at the rim and 1-11 % elsewhere.
