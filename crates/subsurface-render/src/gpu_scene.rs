@@ -178,6 +178,11 @@ pub fn lut_key(material: &crate::scene::MaterialDesc) -> String {
     format!("{}|{}", material.medium, material.roughness)
 }
 
+/// [`lut_key`] of every object, in order.
+pub fn lut_keys(scene: &Scene) -> Vec<String> {
+    scene.objects.iter().map(|o| lut_key(&o.material)).collect()
+}
+
 pub fn upload_objects(
     ctx: &GpuContext,
     scene: &Scene,

@@ -79,7 +79,7 @@ pub struct Renderer {
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
     /// Each object's LUT key (`gpu_scene::lut_key`): a change re-uploads the objects.
-    material_names: Vec<String>,
+    lut_keys: Vec<String>,
     /// The screen-space profile table and each object's row in it.
     profiles: ProfileTable,
     /// Group 2 of the lighting pass (texture-space maps per object).
@@ -266,11 +266,7 @@ impl Renderer {
             far: scene.desc.camera.far,
             light_kinds: kinds,
             shadow_signature: shadow_signature(&lights),
-            material_names: scene
-                .objects
-                .iter()
-                .map(|o| gpu_scene::lut_key(&o.material))
-                .collect(),
+            lut_keys: gpu_scene::lut_keys(scene),
             profiles,
             maps_layout,
             texture_space,
@@ -293,23 +289,19 @@ impl Renderer {
         texture_space::check_uvs(scene, &texture_settings(options))?;
         let device = self.ctx.device.clone();
         let queue = self.ctx.queue.clone();
-        let names: Vec<String> = scene
-            .objects
-            .iter()
-            .map(|o| gpu_scene::lut_key(&o.material))
-            .collect();
+        let keys = gpu_scene::lut_keys(scene);
         let profiles = profile_table(scene, options)?;
         let new_profiles = profiles.kernels != self.profiles.kernels;
-        let reuploaded = names != self.material_names;
+        let reuploaded = keys != self.lut_keys;
         if reuploaded {
-            // A different profile needs a different T(s) LUT in the object's bind group.
+            // A different medium or roughness needs a different LUT in the object's bind group.
             self.objects = gpu_scene::upload_objects(
                 &self.ctx,
                 scene,
                 &self.object_layout,
                 &profiles.object_rows,
             )?;
-            self.material_names = names;
+            self.lut_keys = keys;
         } else {
             let mut cache = MaterialCache::default();
             let mut gpu = self.objects.iter();
