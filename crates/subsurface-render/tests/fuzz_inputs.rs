@@ -125,7 +125,7 @@ fn scene_seeds() -> Vec<(String, String)> {
         "default.toml".to_string(),
         subsurface_render::scene::DEFAULT_SCENE_TOML.to_string(),
     )];
-    for dir in ["scenes", "scenes/canonical"] {
+    for dir in ["scenes", "scenes/canonical", "scenes/experiments"] {
         let mut files: Vec<_> = std::fs::read_dir(root.join(dir))
             .unwrap()
             .map(|e| e.unwrap().path())
