@@ -171,7 +171,6 @@ fn upload_texture(
     Ok(texture.create_view(&Default::default()))
 }
 
-/// `profile_rows`: each scene object's row in the screen-space profile table.
 /// What an object's T(s) LUT depends on: its medium, and its boundary's roughness (the LUT's
 /// last row, the rough boundary's transmittance). Objects with equal keys share one LUT.
 pub fn lut_key(material: &crate::scene::MaterialDesc) -> String {
@@ -183,6 +182,7 @@ pub fn lut_keys(scene: &Scene) -> Vec<String> {
     scene.objects.iter().map(|o| lut_key(&o.material)).collect()
 }
 
+/// `profile_rows`: each scene object's row in the screen-space profile table.
 pub fn upload_objects(
     ctx: &GpuContext,
     scene: &Scene,
