@@ -128,6 +128,8 @@ def main(argv):
     scene = mi.load_file(a.xml, spp=1)
     sensor = scene.sensors()[0]
     w, h = sensor.film().crop_size()
+    # Scene units per millimetre, for the lit points' spacing and the ray offsets: the first
+    # object's scale (every canonical and experiment scene is in metres throughout).
     mm = 1.0 / desc.get("objects", [{}])[0].get("mm_per_unit", 1000.0)
 
     ys, xs = np.mgrid[0:h, 0:w]
