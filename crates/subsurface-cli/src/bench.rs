@@ -62,6 +62,13 @@ pub struct BenchArgs {
     /// [default: the scene's render.transmittance.lateral_taps].
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
     pub lateral_taps: Vec<u32>,
+    /// Diffusion runs: the lateral map's texel sizes in profile millimetres (0..=50),
+    /// comma-separated, e.g. 0,2 for the taps at every pixel inside the lighting pass against
+    /// the lateral pass's map [default: the scene's render.transmittance.lateral_texel_mm].
+    /// The table names each run by the reduction it gave (`diffusion/12:4`: 12 taps, one
+    /// texel per 4x4 pixels).
+    #[arg(long, value_delimiter = ',', value_name = "MM,..")]
+    pub lateral_texel_mm: Vec<f32>,
     /// Numbers of distinct diffusion profiles on screen, comma-separated: the objects (with
     /// --characters, the copies) take the material presets in turn, so the cost of a profile
     /// per material shows beside one profile for all.
@@ -141,6 +148,12 @@ struct Run {
     /// Diffusion runs: the lateral shadow-map taps per shadowed light.
     #[serde(skip_serializing_if = "Option::is_none")]
     lateral_taps: Option<u32>,
+    /// Diffusion runs: the lateral map's texel size asked for, and the reduction it gave (1:
+    /// the taps run at every pixel).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lateral_texel_mm: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lateral_downsample: Option<u32>,
     /// Sum of the median per-pass GPU times (copy baseline excluded).
     frame_ms: f64,
     passes: Vec<PassTiming>,
@@ -162,24 +175,41 @@ struct Run {
 }
 
 impl Run {
-    /// The transmittance as the table names it: `diffusion/12` for diffusion with 12 lateral
-    /// taps, so that `--lateral-taps 0,12` shows two rows.
+    /// The transmittance as the table names it: `diffusion/12:4` for diffusion with 12 lateral
+    /// taps once per 4x4 pixels, so that `--lateral-taps 0,12` shows two rows.
     fn transmittance_label(&self) -> String {
-        match self.lateral_taps {
-            Some(taps) => format!("{}/{taps}", self.transmittance),
-            None => self.transmittance.clone(),
+        match (self.lateral_taps, self.lateral_downsample) {
+            (Some(taps), Some(d)) => format!("{}/{taps}:{d}", self.transmittance),
+            (Some(taps), None) => format!("{}/{taps}", self.transmittance),
+            _ => self.transmittance.clone(),
         }
     }
 }
 
-/// The lateral tap counts a transmittance method is measured at: `--lateral-taps` for
-/// diffusion (the scene's own when empty), nothing to vary for the others.
-fn lateral_counts(tm: TransmittanceMethod, taps: &[u32]) -> Vec<Option<u32>> {
-    if tm == TransmittanceMethod::Diffusion && !taps.is_empty() {
-        taps.iter().map(|t| Some(*t)).collect()
-    } else {
-        vec![None]
+/// The lateral tap counts and texel sizes a transmittance method is measured at:
+/// `--lateral-taps` x `--lateral-texel-mm` for diffusion (the scene's own where a list is
+/// empty), nothing to vary for the others.
+fn lateral_counts(
+    tm: TransmittanceMethod,
+    taps: &[u32],
+    texel_mm: &[f32],
+) -> Vec<(Option<u32>, Option<f32>)> {
+    if tm != TransmittanceMethod::Diffusion {
+        return vec![(None, None)];
     }
+    let taps: Vec<_> = if taps.is_empty() {
+        vec![None]
+    } else {
+        taps.iter().map(|t| Some(*t)).collect()
+    };
+    let texel_mm: Vec<_> = if texel_mm.is_empty() {
+        vec![None]
+    } else {
+        texel_mm.iter().map(|d| Some(*d)).collect()
+    };
+    taps.iter()
+        .flat_map(|t| texel_mm.iter().map(move |d| (*t, *d)))
+        .collect()
 }
 
 #[derive(Serialize)]
@@ -322,6 +352,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         taps.validate()
             .map_err(|e| anyhow::anyhow!("--lateral-taps: {}", e.message))?;
     }
+    for &lateral_texel_mm in &args.lateral_texel_mm {
+        let d = subsurface_render::TransmittanceSettings {
+            lateral_texel_mm,
+            ..Default::default()
+        };
+        d.validate()
+            .map_err(|e| anyhow::anyhow!("--lateral-texel-mm: {}", e.message))?;
+    }
     let configs = sizes.len()
         * light_counts.len()
         * args.characters.len()
@@ -331,7 +369,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         * args
             .transmittance
             .iter()
-            .map(|tm| lateral_counts(*tm, &args.lateral_taps).len())
+            .map(|tm| lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm).len())
             .sum::<usize>();
     let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
         .with_style(
@@ -362,16 +400,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             });
             for (method, fetch) in methods {
                 let transmittances = args.transmittance.iter().flat_map(|tm| {
-                    lateral_counts(*tm, &args.lateral_taps)
+                    lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm)
                         .into_iter()
-                        .map(move |taps| (*tm, taps))
+                        .map(move |(taps, mm)| (*tm, taps, mm))
                 });
-                for (tm, taps) in transmittances {
+                for (tm, taps, texel_mm) in transmittances {
                     bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
                     let mut opts = RenderOptions::from_scene(&scene);
                     let s = &mut opts.settings;
                     if let Some(taps) = taps {
                         s.transmittance.lateral_taps = taps;
+                    }
+                    if let Some(mm) = texel_mm {
+                        s.transmittance.lateral_texel_mm = mm;
                     }
                     (s.width, s.height) = (w, h);
                     s.sss.method = method;
@@ -394,6 +435,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     let mut run = summarise(samples, n, w, h, method, tm);
                     run.lateral_taps = (tm == TransmittanceMethod::Diffusion)
                         .then_some(opts.settings.transmittance.lateral_taps);
+                    if tm == TransmittanceMethod::Diffusion {
+                        run.lateral_texel_mm = Some(opts.settings.transmittance.lateral_texel_mm);
+                        run.lateral_downsample =
+                            Some(subsurface_render::gpu_scene::lateral_downsample(
+                                &scene,
+                                &opts.settings,
+                                w,
+                                h,
+                            ));
+                    }
                     run.profiles = renderer.profile_table().kernels.len() as u32;
                     run.lights = lights;
                     (run.samples, run.jitter) = (args.samples, args.jitter);
@@ -490,6 +541,8 @@ fn summarise(
         fetch: "",
         transmittance: tm.name().to_string(),
         lateral_taps: None,
+        lateral_texel_mm: None,
+        lateral_downsample: None,
         frame_ms,
         passes,
         copy_ms,
@@ -508,7 +561,7 @@ fn table(report: &Report) -> String {
         report.adapter, report.frames, report.warmup
     );
     out += &format!(
-        "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}\n",
+        "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>14} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
         "chars",
         "profiles",
         "lights",
@@ -518,6 +571,7 @@ fn table(report: &Report) -> String {
         "transm.",
         "frame ms",
         "shadow",
+        "lateral",
         "lighting",
         "sss ms",
         "sss/copy"
@@ -526,7 +580,7 @@ fn table(report: &Report) -> String {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
         let sss = sss_ms(&r.passes);
         out += &format!(
-            "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>10} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
+            "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>14} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
             r.characters,
             r.profiles,
             r.lights,
@@ -536,6 +590,7 @@ fn table(report: &Report) -> String {
             r.transmittance_label(),
             r.frame_ms,
             p("shadow"),
+            p("lateral"),
             p("lighting"),
             sss,
             r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
@@ -565,7 +620,8 @@ fn per_light(report: &Report) -> String {
     let same = |a: &Run, b: &Run| {
         (a.characters, a.profiles, a.width, a.height, a.sss, a.fetch)
             == (b.characters, b.profiles, b.width, b.height, b.sss, b.fetch)
-            && (&a.transmittance, a.lateral_taps) == (&b.transmittance, b.lateral_taps)
+            && (&a.transmittance, a.lateral_taps, a.lateral_downsample)
+                == (&b.transmittance, b.lateral_taps, b.lateral_downsample)
     };
     let pass = |r: &Run, n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
     for (i, r) in report.runs.iter().enumerate() {

@@ -86,6 +86,13 @@ pub struct SettingsArgs {
     /// [default: render.transmittance.lateral_taps, 12].
     #[arg(long, value_name = "N")]
     pub lateral_taps: Option<u32>,
+    /// Diffusion: run the lateral taps on a reduced-resolution map whose texels lie about MM
+    /// profile millimetres apart on the skin (0..=50; the reduction follows the skin's size on
+    /// screen, at most 8x8 pixels a texel); each pixel interpolates the nearest results on its
+    /// own surface, or runs the taps itself where there are none; 0 = at every pixel
+    /// [default: render.transmittance.lateral_texel_mm, 4].
+    #[arg(long, value_name = "MM")]
+    pub lateral_texel_mm: Option<f32>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
@@ -126,6 +133,7 @@ impl SettingsArgs {
         set!(self.transmittance, r.transmittance.method);
         set!(self.thickness_filter, r.transmittance.thickness_filter);
         set!(self.lateral_taps, r.transmittance.lateral_taps);
+        set!(self.lateral_texel_mm, r.transmittance.lateral_texel_mm);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
         if self.jitter {
             r.sss.jitter = true;

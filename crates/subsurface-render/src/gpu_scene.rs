@@ -322,8 +322,41 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
         forward: (target - position).normalize().to_array(),
         far: c.far,
         focal_px,
-        _pad: [0.0; 3],
+        viewport: [width as f32, height as f32],
+        _pad: 0.0,
     }
+}
+
+/// The lateral map's reduction for `scene` at `width` x `height` with `settings`
+/// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
+/// the translucent object nearest in those terms, at the depth of its bounds' centre, so that
+/// the map's texels are the same millimetres at any resolution and zoom (a pixel of a farther
+/// object whose texels come out coarser than the shader allows gathers its own taps). 1 (no
+/// map) unless `diffusion` runs lateral taps.
+pub fn lateral_downsample(
+    scene: &Scene,
+    settings: &crate::settings::RenderSettings,
+    width: u32,
+    height: u32,
+) -> u32 {
+    let t = &settings.transmittance;
+    if t.method != crate::settings::TransmittanceMethod::Diffusion || t.lateral_taps == 0 {
+        return 1;
+    }
+    let camera = camera_uniform(scene, width, height);
+    let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+    let pixel_mm = scene
+        .objects
+        .iter()
+        .filter(|o| o.material.translucency > 0.0)
+        .map(|o| {
+            let (lo, hi) = o.world_bounds();
+            let depth = ((lo + hi) * 0.5 - position).dot(forward).max(camera.near);
+            depth / camera.focal_px / (world_per_mm(o) * o.material.translucency)
+        })
+        .filter(|mm| mm.is_finite() && *mm > 0.0)
+        .fold(f32::INFINITY, f32::min);
+    crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
 }
 
 /// Where each light's shadow maps live in the shadow atlas (a 2-D array texture).

@@ -8,7 +8,7 @@ use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
 use crate::material::{MaterialCache, ProfileTable};
 use crate::passes::copy::CopyPass;
-use crate::passes::lighting::{LightingPass, LightingTargets};
+use crate::passes::lighting::{self, LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssInputs, SssPass};
 use crate::passes::texture_space::{self, TextureSpacePass, TextureSpaceSettings, TsmPass};
@@ -78,6 +78,8 @@ pub struct Renderer {
     far: f32,
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
+    /// The lights the lateral pass runs for (`lighting::lateral_lights`).
+    lateral_lights: Vec<u32>,
     /// Each object's LUT key (`gpu_scene::lut_key`): a change re-uploads the objects.
     lut_keys: Vec<String>,
     /// The screen-space profile table and each object's row in it.
@@ -207,6 +209,12 @@ impl Renderer {
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.thickness_view = thickness_flag(options.view);
+        lights.uniform.lateral_downsample = gpu_scene::lateral_downsample(
+            scene,
+            &options.settings,
+            options.width(),
+            options.height(),
+        );
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
@@ -232,7 +240,13 @@ impl Renderer {
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
-        let targets = LightingTargets::new(ctx, options.width(), options.height());
+        let targets = LightingTargets::with_lateral(
+            ctx,
+            options.width(),
+            options.height(),
+            lights.uniform.lateral_downsample,
+        );
+        let lateral_lights = lighting::lateral_lights(&lights.uniform);
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
         sss.resize(
@@ -266,6 +280,7 @@ impl Renderer {
             far: scene.desc.camera.far,
             light_kinds: kinds,
             shadow_signature: shadow_signature(&lights),
+            lateral_lights,
             lut_keys: gpu_scene::lut_keys(scene),
             profiles,
             maps_layout,
@@ -324,6 +339,12 @@ impl Renderer {
         }
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.thickness_view = thickness_flag(options.view);
+        lights.uniform.lateral_downsample = gpu_scene::lateral_downsample(
+            scene,
+            &options.settings,
+            options.width(),
+            options.height(),
+        );
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
         let settings = texture_settings(options);
@@ -384,10 +405,20 @@ impl Renderer {
                 TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
             self.texture_signature = texture_signature;
         }
-        let resized =
-            (options.width(), options.height()) != (self.options.width(), self.options.height());
+        self.lateral_lights = lighting::lateral_lights(&lights.uniform);
+        self.lighting.prepare_lateral(&queue, &self.lateral_lights);
+        // New targets (and every binding of them) when the size or the lateral map's
+        // reduction changes (the camera moved the skin nearer or farther).
+        let resized = (options.width(), options.height())
+            != (self.options.width(), self.options.height())
+            || lights.uniform.lateral_downsample != self.targets.lateral_downsample();
         if resized {
-            self.targets = LightingTargets::new(&self.ctx, options.width(), options.height());
+            self.targets = LightingTargets::with_lateral(
+                &self.ctx,
+                options.width(),
+                options.height(),
+                lights.uniform.lateral_downsample,
+            );
             self.output = output_texture(&self.ctx, options.width(), options.height());
         }
         let views = target_views(&self.targets);
@@ -463,6 +494,7 @@ impl Renderer {
             &self.targets,
             &self.objects,
             self.texture_space.bind_groups(),
+            &self.lateral_lights,
             self.background,
             self.far,
             p,

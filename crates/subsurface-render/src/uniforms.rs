@@ -16,7 +16,9 @@ pub struct CameraUniform {
     pub far: f32,
     /// 0.5 * height / tan(fov_y / 2).
     pub focal_px: f32,
-    pub _pad: [f32; 3],
+    /// The frame's size in pixels.
+    pub viewport: [f32; 2],
+    pub _pad: f32,
 }
 
 #[repr(C)]
@@ -61,7 +63,10 @@ pub struct LightsUniform {
     pub scattering: u32,
     /// `diffusion`: shadow-map taps of the lit surface around the chord (0: the chord alone).
     pub lateral_taps: u32,
-    pub _pad: [u32; 2],
+    /// 1: the lateral taps run per pixel; N > 1: the lighting pass reads them from the lateral
+    /// map at 1/N resolution (`passes::lighting::LateralTargets`).
+    pub lateral_downsample: u32,
+    pub _pad: u32,
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 

@@ -241,6 +241,7 @@ mod tests {
                 thickness_filter: 5,
                 normal_shrink: 0.0007,
                 lateral_taps: 7,
+                lateral_texel_mm: 3.5,
             },
             view: DebugView::Final,
         };

@@ -12,9 +12,8 @@ struct Camera {
     forward: vec3<f32>,    // unit view direction; linear depth is measured along it
     far: f32,
     focal_px: f32,         // 0.5 * height / tan(fov_y / 2)
-    _pad0: f32,
-    _pad1: f32,
-    _pad2: f32,
+    viewport_x: f32,       // the frame's size in pixels (scalars: a vec2 here would move
+    viewport_y: f32,       // to an 8-byte boundary and break the 112-byte layout)
 };
 
 struct Light {
@@ -41,7 +40,7 @@ struct Lights {
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
     scattering: u32,       // 1: subsurface scattering runs (source_shadow in lighting.wgsl)
     lateral_taps: u32,     // diffusion: shadow-map taps of the lit surface around the chord
-    _pad1: u32,
+    lateral_downsample: u32, // > 1: the taps are read from the lateral map at 1/N resolution
     _pad2: u32,
     lights: array<Light, MAX_LIGHTS>,
 };

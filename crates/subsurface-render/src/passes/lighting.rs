@@ -6,9 +6,15 @@
 //! diffuse and specular apart (only diffuse is blurred by subsurface scattering), linear depth
 //! and the per-pixel SSS strength.
 //!
+//! With `diffusion` and lateral taps, a lateral pass runs first: the meshes again at a reduced
+//! resolution ([`LateralTargets`], the reduction from `gpu_scene::lateral_downsample`), the
+//! lateral taps of two lights per pass into a map the lighting pass then interpolates
+//! (transmittance.wgsl, `lateral_from_map`).
+//!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
-//! maps ([`maps::maps_layout`]). The texture-space pass draws its UV-space irradiance with the
+//! maps ([`maps::maps_layout`]), group 3 the lateral map ([`screen_layout`]; the lateral pass
+//! binds its lights' indices there instead). The texture-space pass draws its UV-space irradiance with the
 //! same three groups (`texture_space::irradiance`); this module knows nothing of it.
 
 use wgpu::util::DeviceExt;
@@ -18,7 +24,7 @@ use crate::gpu_scene::GpuObject;
 use crate::passes::maps;
 use crate::passes::util;
 use crate::timing::TimedPass;
-use crate::uniforms::{CameraUniform, LightsUniform};
+use crate::uniforms::{CameraUniform, LightsUniform, MAX_LIGHTS};
 
 pub const SHADER: &str = concat!(
     include_str!("common.wgsl"),
@@ -46,11 +52,127 @@ pub struct LightingTargets {
     /// r = SSS strength (0 = not skin), g = scene units per profile millimetre.
     pub sss: wgpu::Texture,
     zbuffer: wgpu::TextureView,
+    /// `diffusion`'s lateral light at reduced resolution, when the targets were made with a
+    /// `lateral_downsample` above 1.
+    pub lateral: Option<LateralTargets>,
+    /// Group 3 of the lighting pass ([`screen_layout`]): the lateral map, or a 1x1 stand-in.
+    screen: wgpu::BindGroup,
+}
+
+/// The lateral pass's targets: one layer per light ([`MAX_LIGHTS`]) of `LATERAL_FORMAT` at
+/// `ceil(size / downsample)`, rgb = the lateral taps' sum at the texel's surface, a = its view
+/// depth (< 0 where there is none), and the z-buffer of that resolution.
+pub struct LateralTargets {
+    pub downsample: u32,
+    pub width: u32,
+    pub height: u32,
+    pub map: wgpu::Texture,
+    layers: Vec<wgpu::TextureView>,
+    zbuffer: wgpu::TextureView,
+}
+
+/// 32-bit depth beside the light: the lighting pass compares it with its own pixel's to the
+/// fraction of a millimetre, at any distance. Read with loads (no filtering needed).
+pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+impl LateralTargets {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32) -> Self {
+        let device = &ctx.device;
+        let downsample = downsample.max(1);
+        let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
+        let map = util::texture_2d(
+            device,
+            "lateral map",
+            w,
+            h,
+            MAX_LIGHTS as u32,
+            LATERAL_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        let layers = (0..MAX_LIGHTS as u32)
+            .map(|layer| {
+                map.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("lateral map layer"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        Self {
+            downsample,
+            width: w,
+            height: h,
+            map,
+            layers,
+            zbuffer: util::depth_buffer(device, "lateral z-buffer", w, h),
+        }
+    }
+}
+
+/// Layout of group 3 of the lighting pass (`lateral_map` in lighting.wgsl). Pipelines built on
+/// the lighting shader that do not read the map (the texture-space irradiance) take the same
+/// layout and bind [`LightingPass::no_lateral_map`].
+pub fn screen_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lighting screen"),
+        entries: &[util::float_texture_entry(
+            0,
+            wgpu::ShaderStages::FRAGMENT,
+            false,
+            wgpu::TextureViewDimension::D2Array,
+        )],
+    })
+}
+
+fn screen_bind_group(device: &wgpu::Device, map: &wgpu::Texture) -> wgpu::BindGroup {
+    let view = map.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    util::bind_group(
+        device,
+        "lighting screen",
+        &screen_layout(device),
+        [(0, wgpu::BindingResource::TextureView(&view))],
+    )
+}
+
+fn dummy_lateral_map(device: &wgpu::Device) -> wgpu::Texture {
+    util::texture_2d(
+        device,
+        "no lateral map",
+        1,
+        1,
+        1,
+        LATERAL_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
 }
 
 impl LightingTargets {
+    /// Without a lateral map: `diffusion` runs its lateral taps at every pixel.
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        Self::with_lateral(ctx, width, height, 1)
+    }
+
+    /// With `diffusion`'s lateral map at `1 / lateral_downsample` of the size (none for 1).
+    pub fn with_lateral(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        lateral_downsample: u32,
+    ) -> Self {
         let device = &ctx.device;
+        let lateral = (lateral_downsample > 1)
+            .then(|| LateralTargets::new(ctx, width, height, lateral_downsample));
+        let screen = match &lateral {
+            Some(l) => screen_bind_group(device, &l.map),
+            None => screen_bind_group(device, &dummy_lateral_map(device)),
+        };
         let target = |label, format| util::render_target(device, label, width, height, format);
         Self {
             width,
@@ -73,8 +195,45 @@ impl LightingTargets {
             depth: target("linear depth", DEPTH_FORMAT),
             sss: target("sss strength", SSS_FORMAT),
             zbuffer: util::depth_buffer(device, "z-buffer", width, height),
+            lateral,
+            screen,
         }
     }
+
+    /// The lateral map's reduction (1 without one).
+    pub fn lateral_downsample(&self) -> u32 {
+        self.lateral.as_ref().map_or(1, |l| l.downsample)
+    }
+}
+
+/// The lights whose lateral light the lateral pass computes for `lights`: `diffusion` with
+/// taps and a lateral map, each light with a shadow map (the others transmit nothing).
+pub fn lateral_lights(lights: &LightsUniform) -> Vec<u32> {
+    let diffusion = crate::settings::TransmittanceMethod::Diffusion.code();
+    if lights.transmittance != diffusion
+        || lights.lateral_taps == 0
+        || lights.lateral_downsample <= 1
+    {
+        return Vec::new();
+    }
+    (0..lights.count.min(MAX_LIGHTS as u32))
+        .filter(|&i| lights.lights[i as usize].first_layer >= 0.0)
+        .collect()
+}
+
+/// The lateral pass's light indices, one pair per `LATERAL_STRIDE` bytes (a dynamic offset).
+const LATERAL_STRIDE: u64 = 256;
+
+/// `LateralLights` of lighting.wgsl for each pass over `lights`, two lights a pass.
+fn lateral_index_bytes(lights: &[u32]) -> Vec<u8> {
+    let mut bytes = vec![0u8; MAX_LIGHTS * LATERAL_STRIDE as usize];
+    for (k, pair) in lights.chunks(2).take(MAX_LIGHTS).enumerate() {
+        for (j, &l) in pair.iter().enumerate() {
+            let at = k * LATERAL_STRIDE as usize + 4 * j;
+            bytes[at..at + 4].copy_from_slice(&l.to_le_bytes());
+        }
+    }
+    bytes
 }
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
@@ -135,6 +294,14 @@ pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,
     pipeline: wgpu::RenderPipeline,
+    /// `fs_lateral` into one layer of the lateral map, `fs_lateral_pair` into two (group 3:
+    /// the lights' indices, one pair per [`LATERAL_STRIDE`] of the buffer).
+    lateral: wgpu::RenderPipeline,
+    lateral_pair: wgpu::RenderPipeline,
+    lateral_lights: wgpu::BindGroup,
+    lateral_indices: wgpu::Buffer,
+    /// Group 3 for pipelines that take the screen layout but never read the map.
+    no_lateral_map: wgpu::BindGroup,
     frame_bind_group: wgpu::BindGroup,
     /// Group 2 for objects without texture-space maps.
     default_maps: wgpu::BindGroup,
@@ -184,6 +351,7 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -226,11 +394,72 @@ impl LightingPass {
                 },
             ],
         });
+        let prepass_layout = util::pipeline_layout(
+            device,
+            "depth prepass",
+            &[&frame_layout, object_layout, maps_layout],
+        );
         let layout = util::pipeline_layout(
             device,
             "lighting",
-            &[&frame_layout, object_layout, maps_layout],
+            &[
+                &frame_layout,
+                object_layout,
+                maps_layout,
+                &screen_layout(device),
+            ],
         );
+        let lateral_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lateral light"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(16),
+                },
+                count: None,
+            }],
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lateral light indices"),
+            contents: &lateral_bytes,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let lateral_lights = util::bind_group(
+            device,
+            "lateral light",
+            &lateral_layout,
+            [(
+                1,
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &index_buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(16),
+                }),
+            )],
+        );
+        let lateral_pipeline_layout = util::pipeline_layout(
+            device,
+            "lateral",
+            &[&frame_layout, object_layout, maps_layout, &lateral_layout],
+        );
+        let lateral_pipeline = |fragment, targets| {
+            util::MeshPipeline {
+                label: "lateral",
+                layout: &lateral_pipeline_layout,
+                module: &module,
+                vertex: "vs_main",
+                fragment,
+                targets,
+                cull_mode: None,
+                depth: util::DepthTest::Prepassed,
+            }
+            .create(device)
+        };
+        let lateral = lateral_pipeline("fs_lateral", &[LATERAL_FORMAT]);
+        let lateral_pair = lateral_pipeline("fs_lateral_pair", &[LATERAL_FORMAT, LATERAL_FORMAT]);
         let pipeline = util::MeshPipeline {
             label: "lighting",
             layout: &layout,
@@ -247,11 +476,16 @@ impl LightingPass {
         // Meshes drawn without culling in any order would shade every surface a pixel covers
         // that lands before the nearest one (the back of a head, the far side of a hand): a
         // depth-only pass first leaves the lighting shader one fragment per pixel.
-        let prepass = util::depth_prepass_pipeline(device, &layout, &module, "vs_main");
+        let prepass = util::depth_prepass_pipeline(device, &prepass_layout, &module, "vs_main");
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         Self {
             prepass,
             pipeline,
+            lateral,
+            lateral_pair,
+            lateral_lights,
+            lateral_indices: index_buffer,
+            no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
             default_maps,
             frame_bind_group,
             camera,
@@ -264,10 +498,23 @@ impl LightingPass {
         &self.frame_bind_group
     }
 
+    /// Group 3 (see [`screen_layout`]) without a lateral map, for pipelines on the lighting
+    /// shader that never read it.
+    pub fn no_lateral_map(&self) -> &wgpu::BindGroup {
+        &self.no_lateral_map
+    }
+
     /// Writes the per-frame uniforms (the camera and the lights).
     pub fn prepare(&self, queue: &wgpu::Queue, camera: &CameraUniform, lights: &LightsUniform) {
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
         queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
+        self.prepare_lateral(queue, &lateral_lights(lights));
+    }
+
+    /// Writes the lateral pass's light indices for `lights` ([`lateral_lights`]), two per
+    /// pass in the order `encode` draws them.
+    pub fn prepare_lateral(&self, queue: &wgpu::Queue, lights: &[u32]) {
+        queue.write_buffer(&self.lateral_indices, 0, &lateral_index_bytes(lights));
     }
 
     /// Draws every object with `pipeline` and the pass's groups (the depth pre-pass and the
@@ -287,16 +534,122 @@ impl LightingPass {
         }
     }
 
+    /// `lateral_lights` are the lights the lateral pass fills the lateral map for
+    /// ([`lateral_lights`] of the uniform given to [`Self::prepare`]); ignored without a map.
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &LightingTargets,
         objects: &[GpuObject],
+        lateral_lights: &[u32],
         background: [f32; 3],
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        self.encode_with_maps(encoder, targets, objects, &[], background, far, profiler);
+        self.encode_with_maps(
+            encoder,
+            targets,
+            objects,
+            &[],
+            lateral_lights,
+            background,
+            far,
+            profiler,
+        );
+    }
+
+    /// The depth pre-pass into `zbuffer` (cleared), timed as `timed`: the nearest surface per
+    /// pixel, for the [`util::DepthTest::Prepassed`] pipelines after it.
+    fn encode_prepass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        zbuffer: &wgpu::TextureView,
+        timed: &str,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, timed, encoder);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth prepass"),
+                color_attachments: &[],
+                depth_stencil_attachment: util::depth_attachment(
+                    zbuffer,
+                    wgpu::LoadOp::Clear(1.0),
+                    wgpu::StoreOp::Store,
+                ),
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            self.draw_objects(&mut pass, &self.prepass, objects, maps);
+        }
+        timer.end(profiler, encoder);
+    }
+
+    /// The lateral pass (timed "lateral"): a depth pre-pass at the map's resolution, then
+    /// `fs_lateral_pair` into two of `lights`' layers at a time (`fs_lateral` for an odd one).
+    fn encode_lateral(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        lateral: &LateralTargets,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        lights: &[u32],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        self.encode_prepass(
+            encoder,
+            &lateral.zbuffer,
+            "lateral",
+            objects,
+            maps,
+            profiler,
+        );
+        let none = wgpu::Color::TRANSPARENT;
+        let lights: Vec<u32> = lights
+            .iter()
+            .copied()
+            .filter(|&l| (l as usize) < MAX_LIGHTS)
+            .collect();
+        for (k, pair) in lights.chunks(2).enumerate() {
+            let timer = TimedPass::begin(profiler, "lateral", encoder);
+            {
+                let attachments: Vec<_> = pair
+                    .iter()
+                    .map(|&l| {
+                        util::color_attachment(
+                            &lateral.layers[l as usize],
+                            wgpu::LoadOp::Clear(none),
+                        )
+                    })
+                    .collect();
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("lateral"),
+                    color_attachments: &attachments,
+                    // Kept: the next pair's pass tests against the same pre-pass.
+                    depth_stencil_attachment: util::depth_attachment(
+                        &lateral.zbuffer,
+                        wgpu::LoadOp::Load,
+                        wgpu::StoreOp::Store,
+                    ),
+                    timestamp_writes: timer.writes(),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                let offset = (k as u64 * LATERAL_STRIDE) as u32;
+                pass.set_bind_group(3, &self.lateral_lights, &[offset]);
+                let pipeline = if pair.len() == 2 {
+                    &self.lateral_pair
+                } else {
+                    &self.lateral
+                };
+                self.draw_objects(&mut pass, pipeline, objects, maps);
+            }
+            timer.end(profiler, encoder);
+        }
     }
 
     /// As `encode`, with each object's texture-space bind group (`maps[i]` for `objects[i]`;
@@ -308,10 +661,16 @@ impl LightingPass {
         targets: &LightingTargets,
         objects: &[GpuObject],
         maps: &[wgpu::BindGroup],
+        lateral_lights: &[u32],
         background: [f32; 3],
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
+        if let Some(lateral) = &targets.lateral
+            && !lateral_lights.is_empty()
+        {
+            self.encode_lateral(encoder, lateral, objects, maps, lateral_lights, profiler);
+        }
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (diffuse, specular, depth, sss) = (
             view(&targets.diffuse),
@@ -326,23 +685,14 @@ impl LightingPass {
             b: background[2] as f64,
             a: 1.0,
         };
-        let timer = TimedPass::begin(profiler, "depth prepass", encoder);
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("depth prepass"),
-                color_attachments: &[],
-                depth_stencil_attachment: util::depth_attachment(
-                    &targets.zbuffer,
-                    wgpu::LoadOp::Clear(1.0),
-                    wgpu::StoreOp::Store,
-                ),
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            self.draw_objects(&mut pass, &self.prepass, objects, maps);
-        }
-        timer.end(profiler, encoder);
+        self.encode_prepass(
+            encoder,
+            &targets.zbuffer,
+            "depth prepass",
+            objects,
+            maps,
+            profiler,
+        );
         let timer = TimedPass::begin(profiler, "lighting", encoder);
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -370,6 +720,7 @@ impl LightingPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            pass.set_bind_group(3, &targets.screen, &[]);
             self.draw_objects(&mut pass, &self.pipeline, objects, maps);
         }
         timer.end(profiler, encoder);

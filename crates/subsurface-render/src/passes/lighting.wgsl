@@ -116,6 +116,73 @@ struct TextureSpace {
 // layer (-1 where nothing was drawn).
 @group(0) @binding(3) var tsm_atlas: texture_2d_array<f32>;
 
+// `diffusion`'s lateral light at reduced resolution (lighting.rs, `LateralTargets`): one layer
+// per light, rgb = lateral_transmittance at the texel's surface, a = its view depth; a < 0:
+// the light reaches that surface directly (-a its depth), a = 0: nothing there. Group 3 of the lighting pass; the lateral pass binds `lateral_lights` there instead.
+@group(3) @binding(0) var lateral_map: texture_2d_array<f32>;
+
+// The lights one lateral pass fills: `first` into target 0 and, with fs_lateral_pair, `second`
+// into target 1 (two Rgba32Float targets are the 32 bytes per sample every adapter allows).
+struct LateralLights {
+    first: u32,
+    second: u32,
+    _pad0: u32,
+    _pad1: u32,
+};
+@group(3) @binding(1) var<uniform> lateral_lights: LateralLights;
+
+// One lateral-map texel for light `index` at the fragment `in` (see fs_lateral).
+fn lateral_texel(index: u32, in: LitVarying, n_vertex: vec3<f32>) -> vec4<f32> {
+    let none = vec4<f32>(0.0);
+    if (object.lateral_decay <= 0.0) {
+        return none;
+    }
+    let light = lights.lights[index];
+    let l = light_direction(light.kind, light.position, light.direction, in.world);
+    let depth = dot(in.world - camera.position, camera.forward);
+    // Where the light reaches a surface facing it, `transmittance` exits early: the texel says
+    // so (a negative depth) rather than run the taps, and a pixel there that shadow-map acne
+    // leaves partly unlit reads it as no lateral light (lateral_from_map).
+    if (dot(n_vertex, l) > 0.0 && shadow_factor(light, in.world) >= 1.0) {
+        return vec4<f32>(0.0, 0.0, 0.0, -depth);
+    }
+    let entry = light_entry(light, in.world, n_vertex);
+    if (entry.s_mm < 0.0 || dot(entry.normal, entry.normal) <= 0.5) {
+        return none;
+    }
+    return vec4<f32>(lateral_transmittance(light, in.world, n_vertex, l, entry.s_mm), depth);
+}
+
+fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
+    let n = normalize(in.normal);
+    return select(-n, n, front);
+}
+
+// The lateral pass: the lateral taps of one light (`lateral_lights.first`) at each texel of the
+// reduced-resolution map. The taps gather light that entered the lit surface millimetres to
+// centimetres away, so their sum changes over the medium's decay length, not from pixel to
+// pixel: a texel of a few millimetres serves a block of pixels, and the lighting pass
+// interpolates it instead of running twelve shadow-map projections and loads per pixel.
+@fragment
+fn fs_lateral(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    return lateral_texel(lateral_lights.first, in, oriented_normal(in, front));
+}
+
+struct LateralPair {
+    @location(0) first: vec4<f32>,
+    @location(1) second: vec4<f32>,
+};
+
+// Two lights in one pass: the mesh is drawn once for both.
+@fragment
+fn fs_lateral_pair(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
+    let n_vertex = oriented_normal(in, front);
+    return LateralPair(
+        lateral_texel(lateral_lights.first, in, n_vertex),
+        lateral_texel(lateral_lights.second, in, n_vertex),
+    );
+}
+
 // The shading normal: the interpolated (already oriented) normal bent by the tangent-space
 // normal map.
 fn shading_normal(in: LitVarying, n_vertex: vec3<f32>) -> vec3<f32> {
@@ -138,7 +205,9 @@ struct Shading {
 
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
-fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool) -> Shading {
+// `screen`: where `world` is the pixel's surface, `diffusion` may read its lateral light from
+// the lateral map (transmittance.wgsl, lateral_from_map).
+fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool, screen: ScreenSample) -> Shading {
     var s: Shading;
     s.irradiance = vec3<f32>(0.0);
     s.transmitted = vec3<f32>(0.0);
@@ -175,7 +244,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             continue;
         }
         s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
-        let t = transmittance(light, world, n_vertex, l, v, shadow);
+        let t = transmittance(light, i, world, n_vertex, l, v, shadow, screen);
         s.transmitted += radiance * t.diffuse;
         s.specular += radiance * (shadow * boundary_specular(n, l, v, m, rho_s) + t.ballistic);
     }
@@ -205,7 +274,11 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     let m = object.roughness;
     let v = normalize(camera.position - in.world);
     let ts = texture_space.params;
-    let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5);
+    // In uniform control flow: the derivatives extend the pixel's surface to the lateral map's
+    // texels around it.
+    let depth = dot(in.world - camera.position, camera.forward);
+    let screen = ScreenSample(true, in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));
+    let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5, screen);
 
     var out: GBuffer;
     if (ts.x > 0.5) {
@@ -226,7 +299,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     // let the target round to infinity (which the blur would spread as NaN).
     out.diffuse = vec4<f32>(min(out.diffuse.rgb, vec3<f32>(HALF_MAX)), 1.0);
     out.specular = vec4<f32>(min(s.specular, vec3<f32>(HALF_MAX)), 1.0);
-    out.depth = dot(in.world - camera.position, camera.forward);
+    out.depth = depth;
     out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), 0.0);
     return out;
 }

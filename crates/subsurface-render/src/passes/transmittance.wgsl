@@ -330,14 +330,102 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
     return sum * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
 }
 
+// How far (profile mm, along the view) a lateral-map texel's surface may lie from the pixel's
+// surface extended as a plane, for the pixel to take its light: a quarter of the kernel's own
+// decay length (0.9 mm for skin1), so the four texels around a pixel on one smooth surface
+// agree, and a sheet in front of another (tests/transmittance.rs: without the test the front
+// one's pixels beside the edge took the back one's light), a finger in front of a palm, or a
+// curved rim where the plane leaves the surface within a texel gathers its own taps.
+const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
+// The map serves only where its texels are at most this many of the kernel's decay lengths
+// (1 / lateral_decay) apart on the surface. The renderer sizes the map for texels of
+// `lateral_texel_mm` (4 mm, about one decay length for skin1) on the nearest translucent
+// object; this bound keeps a farther object's pixels, whose texels would span centimetres,
+// gathering their own taps. Across a step in thickness (a palm beside the finger roots),
+// where the lateral light changes several-fold within a decay length, texels 1.8 decay
+// lengths apart (6.8 mm) still read within the taps' own quadrature error of the converged
+// sum (tests/transmittance.rs).
+const LATERAL_MAX_TEXEL: f32 = 4.0;
+// Below this share of the bilinear weight on the pixel's own surface, the pixel runs the taps
+// itself rather than extrapolate from a texel a map texel or more away.
+const LATERAL_MIN_WEIGHT: f32 = 0.3;
+
+// The pixel the lighting pass shades, for reading `diffusion`'s lateral light from the map:
+// its centre in pixels, its view depth and that depth's change per pixel across the surface.
+// `from_map` false (the texture-space pass, whose fragments are texels of a UV map) runs the
+// taps at the point itself.
+struct ScreenSample {
+    from_map: bool,
+    xy: vec2<f32>,
+    depth: f32,
+    gradient: vec2<f32>,
+};
+
+// `diffusion`'s lateral light at `screen`'s pixel for light `layer`, interpolated from the
+// lateral map that the lateral pass filled at 1/N resolution (fs_lateral in lighting.wgsl).
+// The four map texels around the pixel count with their bilinear weights where their surface
+// lies within the tolerance of the pixel's, extended as a plane to the texel's centre (so a
+// slanted surface keeps its texels and a depth edge loses them). Texels the light reaches
+// directly hold no taps: on a surface facing the light (`facing`), where only acne or a
+// penumbra leaves the pixel partly unlit, they count as no lateral light; behind it (a rim
+// past the terminator) they are left out. w < 0 where the texels carry too little of the
+// weight (a silhouette, a depth edge), and the caller gathers the taps itself.
+fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32> {
+    let units_per_mm = object.world_per_mm * object.translucency;
+    let texel_mm = f32(lights.lateral_downsample) * screen.depth / (camera.focal_px * units_per_mm);
+    if (texel_mm * object.lateral_decay > LATERAL_MAX_TEXEL) {
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    }
+    let size = vec2<i32>(textureDimensions(lateral_map));
+    // The map renders the same projection into fewer pixels: texel centres at (i + 0.5) / scale.
+    let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
+    let pos = screen.xy * scale - 0.5;
+    let base = vec2<i32>(floor(pos));
+    let f = pos - floor(pos);
+    let tolerance = LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 1e-3) * units_per_mm;
+    var sum = vec3<f32>(0.0);
+    var weight = 0.0;
+    var lit_weight = 0.0;
+    for (var j = 0; j < 2; j++) {
+        for (var i = 0; i < 2; i++) {
+            let texel = base + vec2<i32>(i, j);
+            if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
+                continue;
+            }
+            let t = textureLoad(lateral_map, texel, layer, 0);
+            let centre = (vec2<f32>(texel) + 0.5) / scale;
+            let expected = screen.depth + dot(screen.gradient, centre - screen.xy);
+            let w = select(1.0 - f.x, f.x, i == 1) * select(1.0 - f.y, f.y, j == 1);
+            if (t.w == 0.0 || abs(abs(t.w) - expected) > tolerance) {
+                continue;
+            }
+            if (t.w > 0.0) {
+                sum += t.rgb * w;
+                weight += w;
+            } else {
+                lit_weight += w;
+            }
+        }
+    }
+    if (weight >= LATERAL_MIN_WEIGHT) {
+        return vec4<f32>(sum / weight, 1.0);
+    }
+    if (facing && weight + lit_weight >= LATERAL_MIN_WEIGHT) {
+        return vec4<f32>(sum / (weight + lit_weight), 1.0);
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+}
+
 struct Transmitted {
     diffuse: vec3<f32>,   // joins the irradiance before the blur (times the albedo)
     ballistic: vec3<f32>, // unscattered: joins the specular target, neither blurred nor tinted
 };
 
 // `lit` is the light's shadow factor at p (1 = the light reaches p directly); v points to the
-// camera. Returns factors of the light's radiance.
-fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, v: vec3<f32>, lit: f32) -> Transmitted {
+// camera. `index` is the light's; where `screen.from_map` (the lighting pass: p is the pixel's
+// surface) `diffusion` reads its lateral light from the lateral map when there is one.
+// Returns factors of the light's radiance.
+fn transmittance(light: Light, index: u32, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, v: vec3<f32>, lit: f32, screen: ScreenSample) -> Transmitted {
     var out: Transmitted;
     out.diffuse = vec3<f32>(0.0);
     out.ballistic = vec3<f32>(0.0);
@@ -409,8 +497,14 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 if (lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
                     let flux = lut_row(s_shape, DIFFUSION_RANGE_MM, FLUX_ROW);
                     let shape = select(vec3<f32>(0.0), exit / flux, flux > vec3<f32>(1e-7));
-                    let lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
-                    diffuse = max(diffuse, shape * lateral);
+                    var lateral = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+                    if (screen.from_map && lights.lateral_downsample > 1u) {
+                        lateral = lateral_from_map(index, screen, facing > 0.0);
+                    }
+                    if (lateral.w < 0.0) {
+                        lateral = vec4<f32>(lateral_transmittance(light, p, n_vertex, l, s_mm), 1.0);
+                    }
+                    diffuse = max(diffuse, shape * lateral.rgb);
                 }
                 out.diffuse = diffuse * unlit;
                 let ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);

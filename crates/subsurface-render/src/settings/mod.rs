@@ -6,7 +6,10 @@ mod sss;
 mod transmittance;
 
 pub use sss::{SssFetch, SssMethod, SssSettings};
-pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
+pub use transmittance::{
+    DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, TransmittanceMethod, TransmittanceSettings,
+    lateral_downsample,
+};
 
 use serde::{Deserialize, Serialize};
 

@@ -85,6 +85,33 @@ pub struct TransmittanceSettings {
     /// beside thinner ones (a palm, the finger roots) most light comes that way. 0: the chord's
     /// slab alone.
     pub lateral_taps: u32,
+    /// `diffusion`: the lateral taps run on a map whose texels are about this many profile
+    /// millimetres apart on the skin (0..=50), in a pass of their own, and each pixel
+    /// interpolates the four nearest results on its own surface (where none is, it runs the
+    /// taps itself). The light they gather varies over millimetres, not pixels, so the map's
+    /// reduction follows the skin's size on screen (`lateral_downsample`): the same texels in
+    /// millimetres at any resolution. 0 runs them at every pixel inside the lighting pass.
+    pub lateral_texel_mm: f32,
+}
+
+/// Default of [`TransmittanceSettings::lateral_texel_mm`].
+pub const DEFAULT_LATERAL_TEXEL_MM: f32 = 4.0;
+/// Largest reduction of the lateral map (one texel per 8 x 8 pixels).
+pub const MAX_LATERAL_DOWNSAMPLE: u32 = 8;
+
+/// The lateral map's reduction for skin whose pixels are `pixel_mm` profile millimetres apart
+/// at its smallest on screen: texels of at most `texel_mm`, 1 (no map) where a texel would
+/// not hold two pixels a side, at most [`MAX_LATERAL_DOWNSAMPLE`].
+pub fn lateral_downsample(texel_mm: f32, pixel_mm: f32) -> u32 {
+    if !(texel_mm > 0.0 && pixel_mm > 0.0) {
+        return 1;
+    }
+    let n = (texel_mm / pixel_mm).floor();
+    if n < 2.0 {
+        1
+    } else {
+        (n as u32).min(MAX_LATERAL_DOWNSAMPLE)
+    }
 }
 
 impl Default for TransmittanceSettings {
@@ -94,6 +121,7 @@ impl Default for TransmittanceSettings {
             normal_shrink: 0.005,
             thickness_filter: 3,
             lateral_taps: subsurface_profile::lateral::DEFAULT_LATERAL_TAPS,
+            lateral_texel_mm: DEFAULT_LATERAL_TEXEL_MM,
         }
     }
 }
@@ -120,6 +148,12 @@ impl TransmittanceSettings {
                 format!("must be in 0..={max} (got {})", self.lateral_taps),
             ));
         }
+        check(
+            "lateral_texel_mm",
+            self.lateral_texel_mm,
+            (0.0..=50.0).contains(&self.lateral_texel_mm),
+            "in 0..=50",
+        )?;
         Ok(())
     }
 }

@@ -68,6 +68,11 @@ fn lateral_taps_slider(ui: &mut Ui, n: &mut u32) -> bool {
         .changed()
 }
 
+fn lateral_texel_slider(ui: &mut Ui, mm: &mut f32) -> bool {
+    ui.add(Slider::new(mm, 0.0..=10.0).text("lateral map texel (mm, 0 = per pixel)"))
+        .changed()
+}
+
 pub fn sss(ui: &mut Ui, m: &mut Model) {
     settings_section(ui, "Subsurface scattering", m, |ui, m| {
         side_settings(ui, "a", &mut m.state.a)
@@ -90,7 +95,8 @@ pub fn transmittance(ui: &mut Ui, m: &mut Model) {
             )
             .changed();
         changed |= thickness_filter_slider(ui, &mut t.thickness_filter);
-        changed | lateral_taps_slider(ui, &mut t.lateral_taps)
+        changed |= lateral_taps_slider(ui, &mut t.lateral_taps);
+        changed | lateral_texel_slider(ui, &mut t.lateral_texel_mm)
     });
 }
 

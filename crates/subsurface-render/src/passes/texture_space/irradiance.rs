@@ -5,8 +5,9 @@
 //!
 //! The shader is the lighting pass's (common.wgsl, lighting.wgsl, shadow_lookup.wgsl,
 //! transmittance.wgsl) with irradiance.wgsl appended, and the pipeline takes the lighting
-//! pass's three bind groups: its frame bind group (group 0), the object's (group 1) and the
-//! object's maps (group 2).
+//! pass's bind groups: its frame bind group (group 0), the object's (group 1), the object's
+//! maps (group 2) and, in group 3, no lateral map (texels of a UV map are no pixels of it:
+//! the lateral taps run per texel).
 
 use crate::gpu_scene::{self, GpuObject};
 use crate::passes::lighting::{self, LightingPass};
@@ -36,7 +37,12 @@ impl IrradiancePass {
         let layout = util::pipeline_layout(
             device,
             "texture-space irradiance",
-            &[&frame_layout, &object_layout, maps_layout],
+            &[
+                &frame_layout,
+                &object_layout,
+                maps_layout,
+                &lighting::screen_layout(device),
+            ],
         );
         let module = util::wgsl_module(device, "texture_space/irradiance.wgsl", SHADER);
         let pipeline = util::MeshPipeline {
@@ -81,6 +87,7 @@ impl IrradiancePass {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, lighting.frame_bind_group(), &[]);
             pass.set_bind_group(2, maps, &[]);
+            pass.set_bind_group(3, lighting.no_lateral_map(), &[]);
             object.draw(&mut pass);
         }
         timer.end(profiler, encoder);
