@@ -329,10 +329,12 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
 
 /// The lateral map's reduction for `scene` at `width` x `height` with `settings`
 /// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
-/// the translucent object nearest in those terms, at the depth of its bounds' centre, so that
-/// the map's texels are the same millimetres at any resolution and zoom (a pixel of a farther
-/// object whose texels come out coarser than the shader allows gathers its own taps). 1 (no
-/// map) unless `diffusion` runs lateral taps.
+/// the translucent object in view nearest in those terms, at the depth of its bounds' centre
+/// (at least the near plane), so that the map's texels are the same millimetres at any
+/// resolution and zoom (a pixel of a farther object whose texels come out coarser than the
+/// shader allows gathers its own taps). Objects wholly outside the view do not count. 1 (no
+/// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
+/// transmitted light from its UV-space pass).
 pub fn lateral_downsample(
     scene: &Scene,
     settings: &crate::settings::RenderSettings,
@@ -340,15 +342,19 @@ pub fn lateral_downsample(
     height: u32,
 ) -> u32 {
     let t = &settings.transmittance;
-    if t.method != crate::settings::TransmittanceMethod::Diffusion || t.lateral_taps == 0 {
+    if t.method != crate::settings::TransmittanceMethod::Diffusion
+        || t.lateral_taps == 0
+        || settings.sss.method == crate::settings::SssMethod::Texture
+    {
         return 1;
     }
     let camera = camera_uniform(scene, width, height);
     let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+    let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
     let pixel_mm = scene
         .objects
         .iter()
-        .filter(|o| o.material.translucency > 0.0)
+        .filter(|o| o.material.translucency > 0.0 && in_view(view_proj, o.world_bounds()))
         .map(|o| {
             let (lo, hi) = o.world_bounds();
             let depth = ((lo + hi) * 0.5 - position).dot(forward).max(camera.near);
@@ -357,6 +363,28 @@ pub fn lateral_downsample(
         .filter(|mm| mm.is_finite() && *mm > 0.0)
         .fold(f32::INFINITY, f32::min);
     crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
+}
+
+/// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
+/// frustum plane has all eight corners outside it.
+fn in_view(view_proj: Mat4, (lo, hi): (Vec3, Vec3)) -> bool {
+    let corners: Vec<glam::Vec4> = (0..8)
+        .map(|k| {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            view_proj * c.extend(1.0)
+        })
+        .collect();
+    let outside = |f: &dyn Fn(&glam::Vec4) -> bool| corners.iter().all(f);
+    !(outside(&|c| c.x < -c.w)
+        || outside(&|c| c.x > c.w)
+        || outside(&|c| c.y < -c.w)
+        || outside(&|c| c.y > c.w)
+        || outside(&|c| c.z < 0.0)
+        || outside(&|c| c.z > c.w))
 }
 
 /// Where each light's shadow maps live in the shadow atlas (a 2-D array texture).
@@ -525,4 +553,53 @@ fn light_uniform(
         })
         .collect();
     (u, layers)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::{RenderSettings, SssMethod, TransmittanceMethod};
+
+    fn downsample(scene: &Scene, settings: &RenderSettings, w: u32, h: u32) -> u32 {
+        lateral_downsample(scene, settings, w, h)
+    }
+
+    /// The map's texels stay about `lateral_texel_mm` on the skin: twice the pixels, twice
+    /// the reduction (up to 8), and none where the skin is too small on screen.
+    #[test]
+    fn lateral_map_reduction_follows_the_skin_on_screen() {
+        let scene = Scene::default_scene();
+        let s = scene.desc.render.clone();
+        let (r256, r512) = (
+            downsample(&scene, &s, 256, 256),
+            downsample(&scene, &s, 512, 512),
+        );
+        assert_eq!((r256, r512), (3, 6));
+        assert_eq!(downsample(&scene, &s, 1280, 720), 8);
+        assert_eq!(downsample(&scene, &s, 64, 64), 1);
+        let mut per_pixel = s.clone();
+        per_pixel.transmittance.lateral_texel_mm = 0.0;
+        assert_eq!(downsample(&scene, &per_pixel, 512, 512), 1);
+    }
+
+    /// No map where nothing reads it: other transmittance methods, no taps, texture-space
+    /// diffusion (its transmitted light comes from UV space), no translucent object in view.
+    #[test]
+    fn no_lateral_map_where_nothing_reads_it() {
+        let scene = Scene::default_scene();
+        let s = scene.desc.render.clone();
+        let mut paper = s.clone();
+        paper.transmittance.method = TransmittanceMethod::Paper;
+        let mut no_taps = s.clone();
+        no_taps.transmittance.lateral_taps = 0;
+        let mut texture = s.clone();
+        texture.sss.method = SssMethod::Texture;
+        for settings in [paper, no_taps, texture] {
+            assert_eq!(downsample(&scene, &settings, 512, 512), 1);
+        }
+        let mut away = scene.clone();
+        let c = &mut away.desc.camera;
+        c.target = [c.position[0], c.position[1], c.position[2] + 1.0];
+        assert_eq!(downsample(&away, &s, 512, 512), 1);
+    }
 }

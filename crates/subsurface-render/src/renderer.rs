@@ -8,7 +8,7 @@ use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
 use crate::material::{MaterialCache, ProfileTable};
 use crate::passes::copy::CopyPass;
-use crate::passes::lighting::{self, LightingPass, LightingTargets};
+use crate::passes::lighting::{self, LateralShape, LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssInputs, SssPass};
 use crate::passes::texture_space::{self, TextureSpacePass, TextureSpaceSettings, TsmPass};
@@ -244,7 +244,7 @@ impl Renderer {
             ctx,
             options.width(),
             options.height(),
-            lights.uniform.lateral_downsample,
+            LateralShape::for_lights(&lights.uniform),
         );
         let lateral_lights = lighting::lateral_lights(&lights.uniform);
         let views = target_views(&targets);
@@ -407,19 +407,22 @@ impl Renderer {
         }
         self.lateral_lights = lighting::lateral_lights(&lights.uniform);
         self.lighting.prepare_lateral(&queue, &self.lateral_lights);
-        // New targets (and every binding of them) when the size or the lateral map's
-        // reduction changes (the camera moved the skin nearer or farther).
-        let resized = (options.width(), options.height())
-            != (self.options.width(), self.options.height())
-            || lights.uniform.lateral_downsample != self.targets.lateral_downsample();
+        // New targets (and every binding of them) when the size changes; a new lateral map
+        // alone when only its shape does (the camera moved the skin nearer or farther, a
+        // shadowed light came or went).
+        let resized =
+            (options.width(), options.height()) != (self.options.width(), self.options.height());
         if resized {
             self.targets = LightingTargets::with_lateral(
                 &self.ctx,
                 options.width(),
                 options.height(),
-                lights.uniform.lateral_downsample,
+                LateralShape::for_lights(&lights.uniform),
             );
             self.output = output_texture(&self.ctx, options.width(), options.height());
+        } else if LateralShape::for_lights(&lights.uniform) != self.targets.lateral_shape() {
+            self.targets
+                .set_lateral(&self.ctx, LateralShape::for_lights(&lights.uniform));
         }
         let views = target_views(&self.targets);
         let new_sss = new_profiles || options.settings.sss != self.options.settings.sss;

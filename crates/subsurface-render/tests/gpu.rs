@@ -378,3 +378,33 @@ fn update_matches_a_fresh_renderer() {
         "update() and a new Renderer differ"
     );
 }
+
+/// Moving the camera nearer makes the skin larger on screen, so the lateral map's reduction
+/// (texels of about 4 profile mm) grows: `update` must give the new map the frame a fresh
+/// renderer gives, without new frame-sized targets.
+#[test]
+fn update_follows_the_lateral_map_reduction() {
+    let Some(ctx) = context() else { return };
+    let scene = subsurface_render::Scene::default_scene();
+    let opts = options(&scene, 128, 128);
+    let mut r = Renderer::new(&ctx, &scene, opts.clone()).unwrap();
+    r.render().unwrap();
+    let before = r.targets.lateral_downsample();
+    let mut nearer = scene.clone();
+    nearer.desc.camera.position = [0.01, 0.0, 0.25];
+    r.update(&nearer, &opts).unwrap();
+    let after = r.targets.lateral_downsample();
+    assert!(
+        after > before,
+        "reduction {before} before, {after} with the camera twice as near"
+    );
+    let updated = r.render().unwrap().image;
+    let mut fresh = Renderer::new(&ctx, &nearer, opts).unwrap();
+    assert_eq!(fresh.targets.lateral_downsample(), after);
+    let fresh = fresh.render().unwrap().image;
+    assert_eq!(
+        updated.as_raw(),
+        fresh.as_raw(),
+        "update() and a new Renderer differ"
+    );
+}

@@ -12,8 +12,8 @@ struct Camera {
     forward: vec3<f32>,    // unit view direction; linear depth is measured along it
     far: f32,
     focal_px: f32,         // 0.5 * height / tan(fov_y / 2)
-    viewport_x: f32,       // the frame's size in pixels (scalars: a vec2 here would move
-    viewport_y: f32,       // to an 8-byte boundary and break the 112-byte layout)
+    viewport_x: f32,       // the frame's size in pixels (scalars: a vec2 here would move to
+    viewport_y: f32,       // offset 104, where CameraUniform has it at 100)
 };
 
 struct Light {

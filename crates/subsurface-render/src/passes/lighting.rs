@@ -14,8 +14,9 @@
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
 //! maps ([`maps::maps_layout`]), group 3 the lateral map ([`screen_layout`]; the lateral pass
-//! binds its lights' indices there instead). The texture-space pass draws its UV-space irradiance with the
-//! same three groups (`texture_space::irradiance`); this module knows nothing of it.
+//! binds its lights' indices there instead). The texture-space pass draws its UV-space
+//! irradiance with the same groups (`texture_space::irradiance`), group 3 being
+//! [`LightingPass::no_lateral_map`].
 
 use wgpu::util::DeviceExt;
 
@@ -59,11 +60,14 @@ pub struct LightingTargets {
     screen: wgpu::BindGroup,
 }
 
-/// The lateral pass's targets: one layer per light ([`MAX_LIGHTS`]) of `LATERAL_FORMAT` at
-/// `ceil(size / downsample)`, rgb = the lateral taps' sum at the texel's surface, a = its view
-/// depth (< 0 where there is none), and the z-buffer of that resolution.
+/// The lateral pass's targets: one layer per light index up to the last that the pass fills,
+/// of `LATERAL_FORMAT` at `ceil(size / downsample)`: rgb = the lateral taps' sum at the
+/// texel's surface, a = its view depth; a < 0: the light reaches that surface directly (-a its
+/// depth); a = 0: nothing there. And the z-buffer of that resolution.
 pub struct LateralTargets {
     pub downsample: u32,
+    /// Layers of `map`: the light indices below this have one.
+    pub layer_count: u32,
     pub width: u32,
     pub height: u32,
     pub map: wgpu::Texture,
@@ -76,22 +80,23 @@ pub struct LateralTargets {
 pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl LateralTargets {
-    pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32, layers: u32) -> Self {
         let device = &ctx.device;
         let downsample = downsample.max(1);
+        let layer_count = layers.clamp(1, MAX_LIGHTS as u32);
         let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
         let map = util::texture_2d(
             device,
             "lateral map",
             w,
             h,
-            MAX_LIGHTS as u32,
+            layer_count,
             LATERAL_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
-        let layers = (0..MAX_LIGHTS as u32)
+        let layers = (0..layer_count)
             .map(|layer| {
                 map.create_view(&wgpu::TextureViewDescriptor {
                     label: Some("lateral map layer"),
@@ -104,6 +109,7 @@ impl LateralTargets {
             .collect();
         Self {
             downsample,
+            layer_count,
             width: w,
             height: h,
             map,
@@ -156,23 +162,13 @@ fn dummy_lateral_map(device: &wgpu::Device) -> wgpu::Texture {
 impl LightingTargets {
     /// Without a lateral map: `diffusion` runs its lateral taps at every pixel.
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
-        Self::with_lateral(ctx, width, height, 1)
+        Self::with_lateral(ctx, width, height, LateralShape::NONE)
     }
 
-    /// With `diffusion`'s lateral map at `1 / lateral_downsample` of the size (none for 1).
-    pub fn with_lateral(
-        ctx: &GpuContext,
-        width: u32,
-        height: u32,
-        lateral_downsample: u32,
-    ) -> Self {
+    /// With `diffusion`'s lateral map of `lateral`'s shape (none for a reduction of 1).
+    pub fn with_lateral(ctx: &GpuContext, width: u32, height: u32, lateral: LateralShape) -> Self {
         let device = &ctx.device;
-        let lateral = (lateral_downsample > 1)
-            .then(|| LateralTargets::new(ctx, width, height, lateral_downsample));
-        let screen = match &lateral {
-            Some(l) => screen_bind_group(device, &l.map),
-            None => screen_bind_group(device, &dummy_lateral_map(device)),
-        };
+        let (lateral, screen) = lateral_targets(ctx, width, height, lateral);
         let target = |label, format| util::render_target(device, label, width, height, format);
         Self {
             width,
@@ -204,6 +200,69 @@ impl LightingTargets {
     pub fn lateral_downsample(&self) -> u32 {
         self.lateral.as_ref().map_or(1, |l| l.downsample)
     }
+
+    /// The shape of the lateral map these targets hold.
+    pub fn lateral_shape(&self) -> LateralShape {
+        self.lateral
+            .as_ref()
+            .map_or(LateralShape::NONE, |l| LateralShape {
+                downsample: l.downsample,
+                layers: l.layer_count,
+            })
+    }
+
+    /// A new lateral map of `lateral`'s shape, the other targets kept: the reduction follows
+    /// the skin's size on screen, so a camera moving nearer changes it without a new frame
+    /// size, and a light added to the scene may need a layer more.
+    pub fn set_lateral(&mut self, ctx: &GpuContext, lateral: LateralShape) {
+        (self.lateral, self.screen) = lateral_targets(ctx, self.width, self.height, lateral);
+    }
+}
+
+/// What a lateral map is made of: its reduction (1: no map) and its layers (one per light
+/// index up to the last the lateral pass fills).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LateralShape {
+    pub downsample: u32,
+    pub layers: u32,
+}
+
+impl LateralShape {
+    pub const NONE: Self = Self {
+        downsample: 1,
+        layers: 0,
+    };
+
+    /// For `lights` ([`lateral_lights`]; their uniform's `lateral_downsample`): none where no
+    /// light needs one.
+    pub fn for_lights(lights: &LightsUniform) -> Self {
+        let filled = lateral_lights(lights);
+        match filled.last() {
+            Some(&last) => Self {
+                downsample: lights.lateral_downsample,
+                layers: last + 1,
+            },
+            None => Self::NONE,
+        }
+    }
+}
+
+/// The lateral map of a `width` x `height` frame of `shape` (none for a reduction of 1) and
+/// the lighting pass's group 3 that reads it (a 1x1 stand-in without one).
+fn lateral_targets(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    shape: LateralShape,
+) -> (Option<LateralTargets>, wgpu::BindGroup) {
+    let device = &ctx.device;
+    let lateral = (shape.downsample > 1 && shape.layers > 0)
+        .then(|| LateralTargets::new(ctx, width, height, shape.downsample, shape.layers));
+    let screen = match &lateral {
+        Some(l) => screen_bind_group(device, &l.map),
+        None => screen_bind_group(device, &dummy_lateral_map(device)),
+    };
+    (lateral, screen)
 }
 
 /// The lights whose lateral light the lateral pass computes for `lights`: `diffusion` with
@@ -612,7 +671,7 @@ impl LightingPass {
         let lights: Vec<u32> = lights
             .iter()
             .copied()
-            .filter(|&l| (l as usize) < MAX_LIGHTS)
+            .filter(|&l| l < lateral.layer_count)
             .collect();
         for (k, pair) in lights.chunks(2).enumerate() {
             let timer = TimedPass::begin(profiler, "lateral", encoder);
