@@ -408,3 +408,29 @@ fn update_follows_the_lateral_map_reduction() {
         "update() and a new Renderer differ"
     );
 }
+
+/// The lateral pass fills two lights a pass; the passes after the first shade only the
+/// surfaces the first found nearest. The default scene's two lights copied twice (four
+/// shadowed lights, two passes): each copy's layer of the lateral map must hold what its
+/// original's holds, texel for texel, and hold taps.
+#[test]
+fn every_lateral_pass_fills_its_lights_layers() {
+    let Some(ctx) = context() else { return };
+    let mut scene = subsurface_render::Scene::default_scene();
+    let lights = scene.desc.lights.clone();
+    scene.desc.lights.extend(lights);
+    let mut r = Renderer::new(&ctx, &scene, options(&scene, 256, 256)).unwrap();
+    r.render().unwrap();
+    let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+    assert_eq!(map.depth_or_array_layers(), 4);
+    let layer = |l: u32| {
+        let bytes = subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
+        subsurface_render::readback::decode_float(map.format(), &bytes).0
+    };
+    for l in 0..2 {
+        let (original, copy) = (layer(l), layer(l + 2));
+        let taps = original.chunks_exact(4).filter(|t| t[3] > 0.0).count();
+        assert!(taps > 100, "light {l}: only {taps} texels with taps");
+        assert_eq!(original, copy, "light {} differs from light {l}", l + 2);
+    }
+}
