@@ -671,12 +671,13 @@ impl LightingPass {
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
         let none = wgpu::Color::TRANSPARENT;
-        let lights: Vec<u32> = lights
-            .iter()
-            .copied()
-            .filter(|&l| l < lateral.layer_count)
-            .collect();
+        // Pairs in the order `prepare_lateral` wrote their indices (pair k at offset k); a pair
+        // naming a light the map has no layer for is left out.
+        let mut first = true;
         for (k, pair) in lights.chunks(2).enumerate() {
+            if pair.iter().any(|&l| l >= lateral.layer_count) {
+                continue;
+            }
             let timer = TimedPass::begin(profiler, "lateral", encoder);
             {
                 let attachments: Vec<_> = pair
@@ -694,7 +695,7 @@ impl LightingPass {
                     // Kept: the next pair's pass shades the surfaces this one found nearest.
                     depth_stencil_attachment: util::depth_attachment(
                         &lateral.zbuffer,
-                        if k == 0 {
+                        if first {
                             wgpu::LoadOp::Clear(1.0)
                         } else {
                             wgpu::LoadOp::Load
@@ -707,7 +708,8 @@ impl LightingPass {
                 });
                 let offset = (k as u64 * LATERAL_STRIDE) as u32;
                 pass.set_bind_group(3, &self.lateral_lights, &[offset]);
-                let pipeline = &self.lateral[usize::from(k > 0)][pair.len() - 1];
+                let pipeline = &self.lateral[usize::from(!first)][pair.len() - 1];
+                first = false;
                 self.draw_objects(&mut pass, pipeline, objects, maps);
             }
             timer.end(profiler, encoder);
