@@ -344,21 +344,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(n) = light_counts.iter().find(|n| **n > all_lights) {
         anyhow::bail!("--lights: {n} is more than the scene's {all_lights} lights");
     }
-    for &lateral_taps in &args.lateral_taps {
-        let taps = subsurface_render::TransmittanceSettings {
-            lateral_taps,
-            ..Default::default()
-        };
-        taps.validate()
-            .map_err(|e| anyhow::anyhow!("--lateral-taps: {}", e.message))?;
-    }
-    for &lateral_texel_mm in &args.lateral_texel_mm {
-        let d = subsurface_render::TransmittanceSettings {
-            lateral_texel_mm,
-            ..Default::default()
-        };
-        d.validate()
-            .map_err(|e| anyhow::anyhow!("--lateral-texel-mm: {}", e.message))?;
+    let diffusion = lateral_counts(
+        TransmittanceMethod::Diffusion,
+        &args.lateral_taps,
+        &args.lateral_texel_mm,
+    );
+    for (taps, texel_mm) in diffusion {
+        let mut t = subsurface_render::TransmittanceSettings::default();
+        if let Some(taps) = taps {
+            t.lateral_taps = taps;
+        }
+        if let Some(mm) = texel_mm {
+            t.lateral_texel_mm = mm;
+        }
+        t.validate()
+            .map_err(|e| anyhow::anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
     }
     let configs = sizes.len()
         * light_counts.len()
@@ -437,13 +437,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         .then_some(opts.settings.transmittance.lateral_taps);
                     if tm == TransmittanceMethod::Diffusion {
                         run.lateral_texel_mm = Some(opts.settings.transmittance.lateral_texel_mm);
-                        run.lateral_downsample =
-                            Some(subsurface_render::gpu_scene::lateral_downsample(
-                                &scene,
-                                &opts.settings,
-                                w,
-                                h,
-                            ));
+                        run.lateral_downsample = Some(renderer.targets.lateral_downsample());
                     }
                     run.profiles = renderer.profile_table().kernels.len() as u32;
                     run.lights = lights;

@@ -440,6 +440,8 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     uniform.normal_shrink = transmittance.normal_shrink;
     uniform.thickness_filter = transmittance.thickness_filter;
     uniform.lateral_taps = transmittance.lateral_taps;
+    uniform.lateral_downsample =
+        lateral_downsample(scene, settings, settings.width, settings.height);
     uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {

@@ -209,12 +209,6 @@ impl Renderer {
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.thickness_view = thickness_flag(options.view);
-        lights.uniform.lateral_downsample = gpu_scene::lateral_downsample(
-            scene,
-            &options.settings,
-            options.width(),
-            options.height(),
-        );
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
@@ -339,12 +333,6 @@ impl Renderer {
         }
         let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
         lights.uniform.thickness_view = thickness_flag(options.view);
-        lights.uniform.lateral_downsample = gpu_scene::lateral_downsample(
-            scene,
-            &options.settings,
-            options.width(),
-            options.height(),
-        );
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
         let settings = texture_settings(options);
