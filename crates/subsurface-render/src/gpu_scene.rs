@@ -102,7 +102,28 @@ pub fn object_uniform(
         _pad: [0.0; 2],
         scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
+        boundary_fit: boundary_fit(m.roughness, optics.dipole.eta),
     }
+}
+
+/// `ObjectUniform::boundary_fit`: the polynomial's coefficients 0..4 and 4..8.
+type BoundaryFit = [[f32; 4]; 2];
+
+/// The rough boundary's transmittance polynomial for roughness `alpha` and index `eta`,
+/// computed once per pair in the process: [`object_uniform`] runs on every update (each drag
+/// in the viewer), and the fit integrates the facets at 129 cosines (tens of milliseconds).
+fn boundary_fit(alpha: f32, eta: f64) -> BoundaryFit {
+    static FITS: std::sync::Mutex<Vec<((u32, u64), BoundaryFit)>> =
+        std::sync::Mutex::new(Vec::new());
+    let key = (alpha.to_bits(), eta.to_bits());
+    let mut fits = FITS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, fit)) = fits.iter().find(|(k, _)| *k == key) {
+        return *fit;
+    }
+    let c = subsurface_profile::specular::rough_transmittance_fit(f64::from(alpha), eta);
+    let fit = [0, 1].map(|h| std::array::from_fn(|k| c[4 * h + k] as f32));
+    fits.push((key, fit));
+    fit
 }
 
 fn upload_texture(
@@ -171,10 +192,10 @@ fn upload_texture(
     Ok(texture.create_view(&Default::default()))
 }
 
-/// What an object's T(s) LUT depends on: its medium, and its boundary's roughness (the LUT's
-/// last row, the rough boundary's transmittance). Objects with equal keys share one LUT.
+/// What an object's T(s) LUT depends on: its medium (the boundary's roughness is in the
+/// object's uniform). Objects with equal keys share one LUT.
 pub fn lut_key(material: &crate::scene::MaterialDesc) -> String {
-    format!("{}|{}", material.medium, material.roughness)
+    material.medium.to_string()
 }
 
 /// [`lut_key`] of every object, in order.
@@ -227,10 +248,7 @@ pub fn upload_objects(
         let optics = materials.get(&object.material.medium, &format!("{label}.material.medium"))?;
         let key = lut_key(&object.material);
         if !luts.contains_key(&key) {
-            luts.insert(
-                key.clone(),
-                lut_texture(ctx, &optics, object.material.roughness)?,
-            );
+            luts.insert(key.clone(), lut_texture(ctx, &optics)?);
         }
         let (lut, lut_range) = &luts[&key];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -376,6 +376,8 @@ impl Renderer {
                 0,
                 bytemuck::bytes_of(&lights.uniform),
             );
+            self.lighting
+                .specialize(&self.ctx.device, lights.uniform.transmittance);
         } else {
             self.lighting = LightingPass::with_maps(
                 &self.ctx,

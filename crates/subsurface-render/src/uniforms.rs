@@ -103,6 +103,9 @@ pub struct ObjectUniform {
     /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
     pub scattering: [f32; 3],
     pub _pad2: f32,
+    /// The rough boundary's transmittance against the cosine, as a degree-7 polynomial:
+    /// coefficients 0..4, 4..8 (`subsurface_profile::specular::rough_transmittance_fit`).
+    pub boundary_fit: [[f32; 4]; 2],
 }
 
 #[repr(C)]

@@ -379,6 +379,46 @@ fn update_matches_a_fresh_renderer() {
     );
 }
 
+/// Each transmittance method has its own lighting pipeline (the compiler drops the other
+/// methods' code): `update` to another method must build that method's pipeline, giving the
+/// image a fresh renderer gives, and back again the first image. Without the rebuild, the
+/// `paper` pipeline read `diffusion`'s uniform and drew `paper`'s image.
+#[test]
+fn update_builds_the_pipeline_of_a_new_transmittance_method() {
+    use subsurface_render::TransmittanceMethod;
+    let Some(ctx) = context() else { return };
+    let scene = subsurface_render::Scene::default_scene();
+    let mut opts = options(&scene, 96, 64);
+    opts.settings.transmittance.method = TransmittanceMethod::Paper;
+    let mut r = Renderer::new(&ctx, &scene, opts.clone()).unwrap();
+    let paper = r.render().unwrap().image;
+    let mut diffusion_opts = opts.clone();
+    diffusion_opts.settings.transmittance.method = TransmittanceMethod::Diffusion;
+    r.update(&scene, &diffusion_opts).unwrap();
+    let updated = r.render().unwrap().image;
+    let fresh = Renderer::new(&ctx, &scene, diffusion_opts)
+        .unwrap()
+        .render()
+        .unwrap()
+        .image;
+    assert_ne!(
+        paper.as_raw(),
+        fresh.as_raw(),
+        "the backlit hand must look different with `diffusion`"
+    );
+    assert_eq!(
+        updated.as_raw(),
+        fresh.as_raw(),
+        "update() to `diffusion` and a new Renderer differ"
+    );
+    r.update(&scene, &opts).unwrap();
+    assert_eq!(
+        r.render().unwrap().image.as_raw(),
+        paper.as_raw(),
+        "update() back to `paper` differs from the first frame"
+    );
+}
+
 /// Moving the camera nearer makes the skin larger on screen, so the lateral map's reduction
 /// (texels of about 4 profile mm) grows: `update` must give the new map the frame a fresh
 /// renderer gives, without new frame-sized targets.

@@ -63,6 +63,9 @@ struct Object {
     eta: f32,              // relative index of refraction of the boundary
     lateral_decay: f32,    // the medium's slowest decay rate, 1/mm (spreads the lateral taps)
     scattering: vec3<f32>, // reduced scattering sigma_s', 1/mm (isotropic phase)
+    // The rough boundary's transmittance against the cosine: coefficients 0-3 and 4-7 of a
+    // degree-7 polynomial (transmittance.wgsl, boundary_transmittance).
+    boundary_fit: array<vec4<f32>, 2>,
 };
 
 @group(1) @binding(0) var<uniform> object: Object;

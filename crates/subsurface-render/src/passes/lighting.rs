@@ -20,6 +20,7 @@
 
 use wgpu::util::DeviceExt;
 
+use crate::TransmittanceMethod;
 use crate::gpu::GpuContext;
 use crate::gpu_scene::GpuObject;
 use crate::passes::maps;
@@ -349,10 +350,40 @@ pub struct ShadowMaps<'a> {
     pub depth: &'a wgpu::TextureView,
 }
 
+/// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
+const METHOD_CONSTANT: &str = "TRANSMITTANCE_METHOD";
+
+/// The lighting pass's `fs_main` for transmittance method `method`.
+fn lighting_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    method: u32,
+) -> wgpu::RenderPipeline {
+    util::MeshPipeline {
+        label: "lighting",
+        layout,
+        module,
+        vertex: "vs_main",
+        fragment: "fs_main",
+        targets: &[RADIANCE_FORMAT, RADIANCE_FORMAT, DEPTH_FORMAT, SSS_FORMAT],
+        // Not culled: glTF skin meshes are often open (wrists, necks) and the shader flips
+        // the normal of back faces.
+        cull_mode: None,
+        depth: util::DepthTest::Prepassed,
+        constants: &[(METHOD_CONSTANT, f64::from(method))],
+    }
+    .create(device)
+}
+
 pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,
+    /// `fs_main` built for one transmittance method (`method`): see [`Self::specialize`].
     pipeline: wgpu::RenderPipeline,
+    method: u32,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
     /// `[first pass, later passes][one light, two lights]`: `fs_lateral` into one layer of the
     /// lateral map, `fs_lateral_pair` into two (group 3: the lights' indices, one pair per
     /// [`LATERAL_STRIDE`] of the buffer). The first pass keeps the nearest surface, the later
@@ -412,6 +443,7 @@ impl LightingPass {
             ..Default::default()
         });
         let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
+        let method = lights.transmittance;
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -510,6 +542,11 @@ impl LightingPass {
         // or a mirrored object's, finds no texel of its surface and gathers its own taps).
         // Against a pre-pass and both sides, interleaved at 1280x720: the pass 17 ms instead
         // of 22, the lighting pass unchanged (docs/performance.md).
+        // Only `diffusion` reads the lateral map.
+        let diffusion = [(
+            METHOD_CONSTANT,
+            f64::from(TransmittanceMethod::Diffusion.code()),
+        )];
         let lateral_pipeline = |fragment, targets, depth| {
             util::MeshPipeline {
                 label: "lateral",
@@ -520,6 +557,7 @@ impl LightingPass {
                 targets,
                 cull_mode: Some(wgpu::Face::Back),
                 depth,
+                constants: &diffusion,
             }
             .create(device)
         };
@@ -530,19 +568,7 @@ impl LightingPass {
                 lateral_pipeline("fs_lateral_pair", pair, depth),
             ]
         });
-        let pipeline = util::MeshPipeline {
-            label: "lighting",
-            layout: &layout,
-            module: &module,
-            vertex: "vs_main",
-            fragment: "fs_main",
-            targets: &[RADIANCE_FORMAT, RADIANCE_FORMAT, DEPTH_FORMAT, SSS_FORMAT],
-            // Not culled: glTF skin meshes are often open (wrists, necks) and the shader flips
-            // the normal of back faces.
-            cull_mode: None,
-            depth: util::DepthTest::Prepassed,
-        }
-        .create(device);
+        let pipeline = lighting_pipeline(device, &layout, &module, method);
         // Meshes drawn without culling in any order would shade every surface a pixel covers
         // that lands before the nearest one (the back of a head, the far side of a hand): a
         // depth-only pass first leaves the lighting shader one fragment per pixel.
@@ -551,6 +577,9 @@ impl LightingPass {
         Self {
             prepass,
             pipeline,
+            method,
+            module,
+            layout,
             lateral,
             lateral_lights,
             lateral_indices: index_buffer,
@@ -573,11 +602,26 @@ impl LightingPass {
         &self.no_lateral_map
     }
 
-    /// Writes the per-frame uniforms (the camera and the lights).
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &CameraUniform, lights: &LightsUniform) {
-        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
-        queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
-        self.prepare_lateral(queue, &lateral_lights(lights));
+    /// Writes the per-frame uniforms (the camera and the lights), and builds the lighting
+    /// pipeline again if `lights` asks for another transmittance method.
+    pub fn prepare(&mut self, ctx: &GpuContext, camera: &CameraUniform, lights: &LightsUniform) {
+        ctx.queue
+            .write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
+        ctx.queue
+            .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
+        self.prepare_lateral(&ctx.queue, &lateral_lights(lights));
+        self.specialize(&ctx.device, lights.transmittance);
+    }
+
+    /// Makes the lighting pipeline the one for transmittance method `method`
+    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`), building it if the
+    /// current one is for another. Each method has its own pipeline so that the shader
+    /// compiler drops the others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD`).
+    pub fn specialize(&mut self, device: &wgpu::Device, method: u32) {
+        if method != self.method {
+            self.pipeline = lighting_pipeline(device, &self.layout, &self.module, method);
+            self.method = method;
+        }
     }
 
     /// Writes the lateral pass's light indices for `lights` ([`lateral_lights`]), two per

@@ -214,6 +214,8 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     s.tsm = vec3<f32>(0.0);
     s.specular = vec3<f32>(0.0);
     let count = min(lights.count, MAX_LIGHTS);
+    // Translucent shadow maps are method 4's: a pipeline built for another leaves them out.
+    let tsm = with_tsm && (TRANSMITTANCE_METHOD == 255u || TRANSMITTANCE_METHOD == 4u);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.kind, light.position, light.direction, world);
@@ -231,11 +233,11 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         // the half-float targets cannot hold more anyway.
         let radiance = min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
         let dark = all(radiance <= vec3<f32>(0.0));
-        if (dark && !with_tsm) {
+        if (dark && !tsm) {
             continue;
         }
         let shadow = shadow_factor(light, world);
-        if (with_tsm) {
+        if (tsm) {
             // The back-side irradiance already holds every light's radiance; a point this
             // light sees directly is the entry point itself and receives nothing through it.
             s.tsm += tsm_transmittance(light, world, n_vertex, shadow);

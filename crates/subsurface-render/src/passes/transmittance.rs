@@ -15,14 +15,11 @@ pub use crate::settings::{TransmittanceMethod, TransmittanceSettings};
 /// of the medium seen from that direction (`TransmittanceLut::transport_at`, exit cosines evenly
 /// spaced from grazing to the normal), over `TransmittanceLut::DIFFUSION_S_MAX_MM`; then the
 /// three rows of the lateral taps over the same range: `T_ms(s)`, `-T_ms'(r)` and the rise of
-/// `T_ms` to its peak (`subsurface_profile::lateral`); last, the rough boundary's
-/// transmittance against the cosine to its normal from 0 to 1 across the row
-/// (`subsurface_profile::specular::rough_transmittance`, Beckmann facets of slope `roughness`,
-/// the medium's eta), the same in every channel.
+/// `T_ms` to its peak (`subsurface_profile::lateral`). (The rough boundary's transmittance,
+/// once a last row, is a polynomial in the object's uniform: `ObjectUniform::boundary_fit`.)
 pub fn lut_texture(
     ctx: &GpuContext,
     optics: &MaterialOptics,
-    roughness: f32,
 ) -> Result<(wgpu::TextureView, f32), RenderError> {
     let res = TransmittanceLut::DEFAULT_RESOLUTION;
     let lut = TransmittanceLut::new(&optics.profile, res, TransmittanceLut::DEFAULT_S_MAX_MM)?;
@@ -35,12 +32,6 @@ pub fn lut_texture(
     rows.push(TransmittanceLut::transport(&optics.transport, res)?.to_rgba());
     rows.push(TransmittanceLut::lateral_slope(&optics.transport, res)?.to_rgba());
     rows.push(TransmittanceLut::rise(&optics.transport, res)?.to_rgba());
-    let boundary = subsurface_profile::specular::rough_transmittance_row(
-        f64::from(roughness),
-        optics.dipole.eta,
-        res,
-    );
-    rows.push(boundary.iter().map(|&t| [t, t, t, 1.0]).collect());
     let data: Vec<half::f16> = rows
         .iter()
         .flatten()

@@ -1,6 +1,21 @@
 // Transmittance through thin parts, evaluated per light inside the lighting pass
 // (lighting.wgsl calls `transmittance`; shadow_coord and the bindings are declared there).
 
+// The transmittance method this pipeline is built for (`TransmittanceMethod::code`), or 255
+// to follow `lights.transmittance` at run time (the texture-space irradiance pass). The
+// lighting pass builds one pipeline per method (lighting.rs, `LightingPass::specialize`) so
+// that the compiler drops the other methods' code: one shader for all of them made `paper`'s
+// lighting pass pay for `diffusion`'s taps and LUT reads it never ran (lavapipe, 640x360:
+// 117 ms against 77 specialized; on GPUs the unused branches still cost registers).
+override TRANSMITTANCE_METHOD: u32 = 255u;
+
+fn transmittance_method() -> u32 {
+    if (TRANSMITTANCE_METHOD == 255u) {
+        return lights.transmittance;
+    }
+    return TRANSMITTANCE_METHOD;
+}
+
 // Mean linear light distance over an N x N texel footprint around the projected point: the
 // softer thickness that 000_* suggests (a single texel turns shadow-map aliasing into
 // high-frequency transmitted light). Empty texels (nothing seen by the light) are skipped.
@@ -41,13 +56,11 @@ fn shadow_texel(light: Light, sc: ShadowCoord) -> vec2<i32> {
 // Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the transport rows, 1..=16).
 const DIFFUSION_RANGE_MM: f32 = 32.0;
 // The LUT's rows (transmittance.rs, `lut_texture`): 0 the sum-of-Gaussians T(s), 1..=16 the
-// transport T(s) per exit direction (SlabSolver::EXIT_ANGLES), then the lateral taps' three,
-// then the rough boundary's transmittance against the cosine.
+// transport T(s) per exit direction (SlabSolver::EXIT_ANGLES), then the lateral taps' three.
 const EXIT_ROWS: f32 = 16.0;
 const FLUX_ROW: f32 = 17.0;
 const SLOPE_ROW: f32 = 18.0;
 const RISE_ROW: f32 = 19.0;
-const BOUNDARY_ROW: f32 = 20.0;
 
 // One row of the object's T(s) LUT over 0..range mm, 0 beyond it. `row` is in texels: row 0
 // holds the sum-of-Gaussians T(s), rows 1..=N the transport T(s) per exit direction; a
@@ -74,8 +87,14 @@ fn profile_transmittance(s_mm: f32) -> vec3<f32> {
 // it less obliquely. Where the camera grazes a backlit rim that is most of the light leaving:
 // with the smooth 1 - F the finger proxy's light-side outline read -25 % against the path
 // tracer, with this -14 % (docs/fidelity.md, finding 8).
+// A polynomial fit of the integral rather than a LUT row (within 0.003 of it for roughness
+// 0.15 to 1): `diffusion` evaluates it up to a dozen times per light and pixel, and the reads
+// were 14 of its lighting pass's 117 ms on lavapipe at 640x360 (docs/performance.md).
 fn boundary_transmittance(mu: f32) -> f32 {
-    return lut_row(clamp(mu, 0.0, 1.0), 1.0, BOUNDARY_ROW).r;
+    let x = clamp(mu, 0.0, 1.0);
+    let lo = object.boundary_fit[0];
+    let hi = object.boundary_fit[1];
+    return ((((((hi.w * x + hi.z) * x + hi.y) * x + hi.x) * x + lo.w) * x + lo.z) * x + lo.y) * x + lo.x;
 }
 
 // Multiply scattered light through a slab of the object's medium by exact transport
@@ -144,7 +163,7 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     // (0.5 mm in the canonical scenes: +15 % of red diffusion through thick parts, 1.5x the
     // unscattered light through thin ones). The extensions measure from p itself and use the
     // shrunk point only to find the entry texel.
-    let measured_at = select(p, shrunk, lights.transmittance == 1u);
+    let measured_at = select(p, shrunk, transmittance_method() == 1u);
     let s_units = abs(light_distance(light.kind, light.position, light.direction, measured_at) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
     e.s_mm = s_units / (object.world_per_mm * object.translucency);
@@ -285,14 +304,23 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
     let t1 = normalize(cross(l, a));
     let t2 = cross(l, t1);
     let chord = max(s_mm, 1.0);
+    // Loop invariants and recurrences rather than per-tap transcendentals: this loop is most
+    // of the lateral pass (lavapipe, 640x360: 12 taps cost 0.7 ms each, the rest of the pass 8).
+    let normal_in = 1.0 / boundary_transmittance(1.0);
+    let per_tap = 1.0 / (f32(taps) * sigma);
+    // The taps turn by the golden angle: (cos, sin) of tap i, rotated once per tap.
+    let turn = vec2<f32>(-0.73736887, 0.67549029); // cos, sin of 2.39996323
+    var dir = vec2<f32>(1.0, 0.0);
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < taps; i++) {
         let xi = (f32(i) + 0.5) / f32(taps);
         let u = -log(1.0 - xi) / sigma;
         let r_tap = chord + u;
         let rho = sqrt(r_tap * r_tap - chord * chord);
-        let phi = f32(i) * 2.39996323;
-        let q = shrunk + (t1 * cos(phi) + t2 * sin(phi)) * (rho * units_per_mm);
+        let q = shrunk + (t1 * dir.x + t2 * dir.y) * (rho * units_per_mm);
+        // The stratified taps' density is sigma exp(-sigma u) = sigma (1 - xi) per mm.
+        let weight = r_tap * per_tap / (1.0 - xi);
+        dir = vec2<f32>(dir.x * turn.x - dir.y * turn.y, dir.x * turn.y + dir.y * turn.x);
         let sc = shadow_coord(light, q);
         if (!sc.inside) {
             continue;
@@ -310,7 +338,7 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
         var entry_in = 1.0;
         if (texel.y >= 0.0) {
             let cos_e = max(dot(decode_normal(texel.y), to_light), 0.0);
-            entry_in = boundary_transmittance(cos_e) / boundary_transmittance(1.0);
+            entry_in = boundary_transmittance(cos_e) * normal_in;
         }
         let entry = q + to_light * (light_distance(light.kind, light.position, light.direction, q) - d);
         let offset = entry - p;
@@ -324,7 +352,6 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
         // Past the table the kernel goes on decaying at the slowest rate (lateral.rs, slope_at).
         let tail = exp(-sigma * max(r - DIFFUSION_RANGE_MM, 0.0));
         let slope = lut_row(min(r, DIFFUSION_RANGE_MM), DIFFUSION_RANGE_MM, SLOPE_ROW) * tail;
-        let weight = r_tap / (f32(taps) * sigma * exp(-sigma * u));
         sum += slope / r * weight * below * entry_in;
     }
     return sum * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
@@ -429,7 +456,7 @@ fn transmittance(light: Light, index: u32, p: vec3<f32>, n_vertex: vec3<f32>, l:
     var out: Transmitted;
     out.diffuse = vec3<f32>(0.0);
     out.ballistic = vec3<f32>(0.0);
-    let method = lights.transmittance;
+    let method = transmittance_method();
     // 4 (translucent shadow maps) has its own path, tsm_transmittance.
     if (method == 0u || method == 4u || method > 5u) {
         return out;

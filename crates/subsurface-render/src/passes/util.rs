@@ -251,6 +251,8 @@ pub struct MeshPipeline<'a> {
     pub targets: &'a [wgpu::TextureFormat],
     pub cull_mode: Option<wgpu::Face>,
     pub depth: DepthTest,
+    /// Values of the fragment stage's pipeline-overridable constants (WGSL `override`).
+    pub constants: &'a [(&'a str, f64)],
 }
 
 /// How a [`MeshPipeline`] uses its [`depth_buffer`].
@@ -287,7 +289,10 @@ impl MeshPipeline<'_> {
             fragment: Some(wgpu::FragmentState {
                 module: self.module,
                 entry_point: Some(self.fragment),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: self.constants,
+                    ..Default::default()
+                },
                 targets: &targets,
             }),
             multiview_mask: None,
@@ -446,6 +451,7 @@ impl LayeredPass {
             // No culling: thickness needs the surface nearest the light whichever way it faces.
             cull_mode: None,
             depth: DepthTest::Nearest,
+            constants: &[],
         }
         .create(device);
         let size = atlas_size.max(1);

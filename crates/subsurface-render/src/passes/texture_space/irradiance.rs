@@ -55,6 +55,9 @@ impl IrradiancePass {
             // UV islands may be laid out with either winding; no depth (one surface per texel).
             cull_mode: None,
             depth: util::DepthTest::Off,
+            // Follows `lights.transmittance` (TRANSMITTANCE_METHOD's default): the pass is
+            // built once per texture-space setup, not per method.
+            constants: &[],
         }
         .create(device);
         Self { pipeline }
