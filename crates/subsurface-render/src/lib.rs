@@ -51,6 +51,54 @@ mod shader_tests {
         }
     }
 
+    /// The lighting pass builds `fs_main` once per transmittance method by setting the WGSL
+    /// override `TRANSMITTANCE_METHOD` (passes/lighting.rs): each value, and the default that
+    /// follows the uniform, must survive override processing and SPIR-V output, as wgpu does
+    /// it when the pipeline is created (an error there would only show on a GPU).
+    #[test]
+    fn every_transmittance_specialization_compiles() {
+        let source = crate::passes::lighting::SHADER;
+        let module = naga::front::wgsl::parse_str(source).unwrap();
+        assert!(
+            module
+                .overrides
+                .iter()
+                .any(|(_, o)| o.name.as_deref() == Some("TRANSMITTANCE_METHOD")),
+            "lighting.wgsl has no TRANSMITTANCE_METHOD override"
+        );
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap();
+        let codes = crate::TransmittanceMethod::ALL.map(|m| m.code());
+        for code in codes.into_iter().chain([255]) {
+            let mut constants = naga::back::PipelineConstants::default();
+            constants.insert("TRANSMITTANCE_METHOD".into(), f64::from(code));
+            for entry in ["fs_main", "fs_lateral", "fs_lateral_pair"] {
+                let stage = Some((naga::ShaderStage::Fragment, entry));
+                let (specialized, specialized_info) =
+                    naga::back::pipeline_constants::process_overrides(
+                        &module, &info, stage, &constants,
+                    )
+                    .unwrap_or_else(|e| panic!("method {code}, {entry}: {e:?}"));
+                let options = naga::back::spv::Options::default();
+                let pipeline = naga::back::spv::PipelineOptions {
+                    shader_stage: naga::ShaderStage::Fragment,
+                    entry_point: entry.into(),
+                };
+                naga::back::spv::write_vec(
+                    &specialized,
+                    &specialized_info,
+                    &options,
+                    Some(&pipeline),
+                )
+                .unwrap_or_else(|e| panic!("method {code}, {entry}: {e:?}"));
+            }
+        }
+    }
+
     /// Every .wgsl file beside the passes (in their subfolders too) is part of some compiled
     /// shader, so none escapes the validation above.
     #[test]

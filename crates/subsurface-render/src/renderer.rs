@@ -303,7 +303,7 @@ impl Renderer {
         let new_profiles = profiles.kernels != self.profiles.kernels;
         let reuploaded = keys != self.lut_keys;
         if reuploaded {
-            // A different medium or roughness needs a different LUT in the object's bind group.
+            // A different medium needs a different LUT in the object's bind group.
             self.objects = gpu_scene::upload_objects(
                 &self.ctx,
                 scene,
@@ -370,14 +370,8 @@ impl Renderer {
         // calls this on every mouse drag).
         let new_maps = rebuild_shadows || had_tsm != settings.tsm || (settings.tsm && !had_tsm);
         if !new_maps {
-            queue.write_buffer(&self.lighting.camera, 0, bytemuck::bytes_of(&camera));
-            queue.write_buffer(
-                &self.lighting.lights,
-                0,
-                bytemuck::bytes_of(&lights.uniform),
-            );
-            self.lighting
-                .specialize(&self.ctx.device, lights.uniform.transmittance);
+            // The uniforms and, for another transmittance method, its pipeline.
+            self.lighting.prepare(&self.ctx, &camera, &lights.uniform);
         } else {
             self.lighting = LightingPass::with_maps(
                 &self.ctx,

@@ -379,9 +379,12 @@ fn lighting_pipeline(
 pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,
-    /// `fs_main` built for one transmittance method (`method`): see [`Self::specialize`].
-    pipeline: wgpu::RenderPipeline,
-    method: u32,
+    /// `fs_main` built per transmittance method (`TransmittanceMethod::code`), each kept once
+    /// built: switching methods back and forth in the viewer compiles each once. See
+    /// [`Self::specialize`].
+    pipelines: Vec<(u32, wgpu::RenderPipeline)>,
+    /// The index in `pipelines` of the method the lights uniform asks for.
+    current: usize,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// `[first pass, later passes][one light, two lights]`: `fs_lateral` into one layer of the
@@ -396,8 +399,10 @@ pub struct LightingPass {
     frame_bind_group: wgpu::BindGroup,
     /// Group 2 for objects without texture-space maps.
     default_maps: wgpu::BindGroup,
-    pub camera: wgpu::Buffer,
-    pub lights: wgpu::Buffer,
+    /// Written only through [`Self::prepare`], which keeps the pipeline's transmittance
+    /// method the lights uniform's.
+    camera: wgpu::Buffer,
+    lights: wgpu::Buffer,
 }
 
 impl LightingPass {
@@ -576,8 +581,8 @@ impl LightingPass {
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         Self {
             prepass,
-            pipeline,
-            method,
+            pipelines: vec![(method, pipeline)],
+            current: 0,
             module,
             layout,
             lateral,
@@ -614,14 +619,18 @@ impl LightingPass {
     }
 
     /// Makes the lighting pipeline the one for transmittance method `method`
-    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`), building it if the
-    /// current one is for another. Each method has its own pipeline so that the shader
+    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`), building it the first
+    /// time it is asked for. Each method has its own pipeline so that the shader
     /// compiler drops the others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD`).
     pub fn specialize(&mut self, device: &wgpu::Device, method: u32) {
-        if method != self.method {
-            self.pipeline = lighting_pipeline(device, &self.layout, &self.module, method);
-            self.method = method;
-        }
+        self.current = match self.pipelines.iter().position(|(m, _)| *m == method) {
+            Some(i) => i,
+            None => {
+                let pipeline = lighting_pipeline(device, &self.layout, &self.module, method);
+                self.pipelines.push((method, pipeline));
+                self.pipelines.len() - 1
+            }
+        };
     }
 
     /// Writes the lateral pass's light indices for `lights` ([`lateral_lights`]), two per
@@ -829,7 +838,7 @@ impl LightingPass {
                 multiview_mask: None,
             });
             pass.set_bind_group(3, &targets.screen, &[]);
-            self.draw_objects(&mut pass, &self.pipeline, objects, maps);
+            self.draw_objects(&mut pass, &self.pipelines[self.current].1, objects, maps);
         }
         timer.end(profiler, encoder);
     }
