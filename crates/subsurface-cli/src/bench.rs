@@ -111,6 +111,12 @@ pub struct BenchArgs {
     /// Timed frames; the median of each pass is reported.
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
+    /// Measure every configuration this many times in turn (A, B, A, B, ...), each round with
+    /// its own warm-up and frames, and report the median over all rounds' frames: a machine
+    /// whose speed drifts over minutes (a CPU driver, a laptop's clocks) then shifts every
+    /// configuration alike instead of whichever ran last. JSON gives each round's frame time.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub rounds: u32,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -154,8 +160,10 @@ struct Run {
     lateral_texel_mm: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     lateral_downsample: Option<u32>,
-    /// Sum of the median per-pass GPU times (copy baseline excluded).
+    /// Median frame time (sum of the passes, copy baseline excluded).
     frame_ms: f64,
+    /// `--rounds`: each round's median frame time, in the order they ran.
+    round_frame_ms: Vec<f64>,
     passes: Vec<PassTiming>,
     /// A plain full-screen copy of the diffuse target, measured in the same frames.
     copy_ms: f64,
@@ -217,6 +225,7 @@ struct Report {
     adapter: String,
     warmup: u32,
     frames: u32,
+    rounds: u32,
     /// `--bandwidth`, GB/s.
     #[serde(skip_serializing_if = "Option::is_none")]
     bandwidth_gbps: Option<f64>,
@@ -288,6 +297,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.frames >= 1,
         "--frames: must be at least 1 (got {})",
         args.frames
+    );
+    anyhow::ensure!(
+        (1..=100).contains(&args.rounds),
+        "--rounds: must be in 1..=100 (got {})",
+        args.rounds
     );
     if let Some(b) = args.bandwidth {
         anyhow::ensure!(
@@ -371,12 +385,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .iter()
             .map(|tm| lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm).len())
             .sum::<usize>();
-    let bar = indicatif::ProgressBar::new(configs as u64 * (args.warmup + args.frames) as u64)
-        .with_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
-                .expect("static template"),
-        );
-    let mut runs = Vec::new();
+    let bar = indicatif::ProgressBar::new(
+        configs as u64 * (args.warmup + args.frames) as u64 * args.rounds as u64,
+    )
+    .with_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
+            .expect("static template"),
+    );
+    // Every configuration first, so that `--rounds` can measure them in turn.
+    let mut scenes = Vec::new();
+    let mut plans = Vec::new();
     let counts = args.characters.iter().flat_map(|n| {
         let lights = &light_counts;
         args.profiles
@@ -405,7 +423,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         .map(move |(taps, mm)| (*tm, taps, mm))
                 });
                 for (tm, taps, texel_mm) in transmittances {
-                    bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
                     let mut opts = RenderOptions::from_scene(&scene);
                     let s = &mut opts.settings;
                     if let Some(taps) = taps {
@@ -421,45 +438,73 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     s.sss.fetch = fetch;
                     s.transmittance.method = tm;
                     opts.baseline_copy = true;
-                    let sss_settings = opts.settings.sss.clone();
-                    let mut renderer = Renderer::new(&ctx, &scene, opts.clone())
-                        .context("creating the renderer")?;
-                    let mut samples: Vec<Vec<PassTiming>> = Vec::new();
-                    for i in 0..args.warmup + args.frames {
-                        let t = renderer.render_timed()?;
-                        if i >= args.warmup {
-                            samples.push(t);
-                        }
-                        bar.inc(1);
-                    }
-                    let mut run = summarise(samples, n, w, h, method, tm);
-                    run.lateral_taps = (tm == TransmittanceMethod::Diffusion)
-                        .then_some(opts.settings.transmittance.lateral_taps);
-                    if tm == TransmittanceMethod::Diffusion {
-                        run.lateral_texel_mm = Some(opts.settings.transmittance.lateral_texel_mm);
-                        run.lateral_downsample = Some(renderer.targets.lateral_downsample());
-                    }
-                    run.profiles = renderer.profile_table().kernels.len() as u32;
-                    run.lights = lights;
-                    (run.samples, run.jitter) = (args.samples, args.jitter);
-                    run.fetch = fetch.name();
-                    run.traffic = traffic_of(&run, &sss_settings, args.bandwidth);
-                    if let (Some(fixed), SssMethod::Separable) = (args.flip_vs, method) {
-                        let ours = renderer.render()?.image;
-                        let skin: Vec<bool> =
-                            renderer.read_sss()?.iter().map(|m| m[0] > 0.0).collect();
-                        let mut o = opts.clone();
-                        (o.settings.sss.samples, o.settings.sss.jitter) = (fixed, false);
-                        let reference = Renderer::new(&ctx, &scene, o)
-                            .context("--flip-vs")?
-                            .render()?
-                            .image;
-                        let (all, on_skin) = flip_means(&reference, &ours, &skin);
-                        (run.flip_vs_fixed, run.flip_vs_fixed_skin) = (Some(all), on_skin);
-                    }
-                    runs.push(run);
+                    plans.push(Plan {
+                        scene: scenes.len(),
+                        characters: n,
+                        lights,
+                        method,
+                        fetch,
+                        transmittance: tm,
+                        opts,
+                    });
                 }
             }
+        }
+        scenes.push(scene);
+    }
+    let mut samples: Vec<Vec<Vec<PassTiming>>> = plans.iter().map(|_| Vec::new()).collect();
+    let mut round_frame_ms: Vec<Vec<f64>> = plans.iter().map(|_| Vec::new()).collect();
+    let mut runs = Vec::new();
+    for round in 0..args.rounds {
+        for (i, plan) in plans.iter().enumerate() {
+            let (n, tm, method) = (plan.characters, plan.transmittance, plan.method);
+            let (w, h) = (plan.opts.settings.width, plan.opts.settings.height);
+            bar.set_message(format!("{n} x {w}x{h} {method} {tm}"));
+            let scene = &scenes[plan.scene];
+            let mut renderer =
+                Renderer::new(&ctx, scene, plan.opts.clone()).context("creating the renderer")?;
+            let mut frames = Vec::new();
+            for f in 0..args.warmup + args.frames {
+                let t = renderer.render_timed()?;
+                if f >= args.warmup {
+                    frames.push(t);
+                }
+                bar.inc(1);
+            }
+            round_frame_ms[i].push(median(frames.iter().map(|f| frame_sum(f)).collect()));
+            samples[i].extend(frames);
+            if round + 1 < args.rounds {
+                continue;
+            }
+            // The last round: everything that needs the renderer, then the run.
+            let opts = &plan.opts;
+            let sss_settings = opts.settings.sss.clone();
+            let mut run = summarise(std::mem::take(&mut samples[i]), n, w, h, method, tm);
+            run.round_frame_ms = std::mem::take(&mut round_frame_ms[i]);
+            run.lateral_taps = (tm == TransmittanceMethod::Diffusion)
+                .then_some(opts.settings.transmittance.lateral_taps);
+            if tm == TransmittanceMethod::Diffusion {
+                run.lateral_texel_mm = Some(opts.settings.transmittance.lateral_texel_mm);
+                run.lateral_downsample = Some(renderer.targets.lateral_downsample());
+            }
+            run.profiles = renderer.profile_table().kernels.len() as u32;
+            run.lights = plan.lights;
+            (run.samples, run.jitter) = (args.samples, args.jitter);
+            run.fetch = plan.fetch.name();
+            run.traffic = traffic_of(&run, &sss_settings, args.bandwidth);
+            if let (Some(fixed), SssMethod::Separable) = (args.flip_vs, method) {
+                let ours = renderer.render()?.image;
+                let skin: Vec<bool> = renderer.read_sss()?.iter().map(|m| m[0] > 0.0).collect();
+                let mut o = opts.clone();
+                (o.settings.sss.samples, o.settings.sss.jitter) = (fixed, false);
+                let reference = Renderer::new(&ctx, scene, o)
+                    .context("--flip-vs")?
+                    .render()?
+                    .image;
+                let (all, on_skin) = flip_means(&reference, &ours, &skin);
+                (run.flip_vs_fixed, run.flip_vs_fixed_skin) = (Some(all), on_skin);
+            }
+            runs.push(run);
         }
     }
     bar.finish_and_clear();
@@ -467,6 +512,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         adapter: ctx.adapter_name(),
         warmup: args.warmup,
         frames: args.frames,
+        rounds: args.rounds,
         bandwidth_gbps: args.bandwidth,
         flip_vs: args.flip_vs,
         runs,
@@ -485,6 +531,27 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     print_summary(stdout_taken, &text);
     Ok(())
+}
+
+/// One configuration `run` measures: the scene (an index into its replicated scenes) and the
+/// options it renders with.
+struct Plan {
+    scene: usize,
+    characters: u32,
+    lights: u32,
+    method: SssMethod,
+    fetch: SssFetch,
+    transmittance: TransmittanceMethod,
+    opts: RenderOptions,
+}
+
+/// A frame's GPU time: its passes, the copy baseline left out.
+fn frame_sum(frame: &[PassTiming]) -> f64 {
+    frame
+        .iter()
+        .filter(|t| t.name != "copy")
+        .map(|t| t.ms)
+        .sum()
 }
 
 fn summarise(
@@ -518,12 +585,7 @@ fn summarise(
             ms: per_pass(n),
         })
         .collect();
-    let frame_ms = median(
-        samples
-            .iter()
-            .map(|f| f.iter().filter(|t| t.name != "copy").map(|t| t.ms).sum())
-            .collect(),
-    );
+    let frame_ms = median(samples.iter().map(|f| frame_sum(f)).collect());
     let sss_ms = sss_ms(&passes);
     Run {
         characters: n,
@@ -538,6 +600,7 @@ fn summarise(
         lateral_texel_mm: None,
         lateral_downsample: None,
         frame_ms,
+        round_frame_ms: Vec::new(),
         passes,
         copy_ms,
         sss_over_copy: (sss_ms > 0.0 && copy_ms > 0.0).then(|| sss_ms / copy_ms),
@@ -550,10 +613,17 @@ fn summarise(
 }
 
 fn table(report: &Report) -> String {
-    let mut out = format!(
-        "{} — median of {} frames after {} warm-up\n",
-        report.adapter, report.frames, report.warmup
-    );
+    let mut out = if report.rounds > 1 {
+        format!(
+            "{} — median of {} rounds x {} frames, each after {} warm-up, configurations in turn\n",
+            report.adapter, report.rounds, report.frames, report.warmup
+        )
+    } else {
+        format!(
+            "{} — median of {} frames after {} warm-up\n",
+            report.adapter, report.frames, report.warmup
+        )
+    };
     out += &format!(
         "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>14} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
         "chars",

@@ -138,6 +138,58 @@ fn bench_json_has_runs_with_positive_times() {
     );
 }
 
+/// `--rounds 3` measures each configuration three times, in turn: each run carries the three
+/// rounds' frame times and reports the median over all their frames (one frame a round: the
+/// middle round's). `--rounds 0` is one line of error.
+#[test]
+fn bench_rounds_measure_each_configuration_in_turn() {
+    let mut args = small_bench(&[
+        "--sss",
+        "none",
+        "--transmittance",
+        "off,paper",
+        "--rounds",
+        "3",
+    ]);
+    let frames = args.iter().position(|a| *a == "--frames").unwrap() + 1;
+    args[frames] = "1";
+    let Some((_, out)) = run_with_gpu("bench-rounds", &args) else {
+        return;
+    };
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["rounds"], 3);
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2, "one run per configuration, not per round");
+    for r in runs {
+        let mut rounds: Vec<f64> = r["round_frame_ms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(rounds.len(), 3, "{r}");
+        assert!(rounds.iter().all(|ms| *ms > 0.0), "{r}");
+        rounds.sort_by(f64::total_cmp);
+        let median = r["frame_ms"].as_f64().unwrap();
+        assert!(
+            (median - rounds[1]).abs() <= 1e-9 * median,
+            "median {median}, rounds {rounds:?}"
+        );
+    }
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_subsurface"))
+        .args(["bench", "--rounds", "0"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(
+        errors,
+        ["error: --rounds: must be in 1..=100 (got 0)"],
+        "{err}"
+    );
+}
+
 /// `--lateral-taps 0,12` measures `diffusion` at both counts; the other methods once.
 #[test]
 fn bench_measures_diffusion_at_each_lateral_tap_count() {
