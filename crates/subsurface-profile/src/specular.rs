@@ -112,25 +112,6 @@ pub fn rough_transmittance(cos_theta: f64, alpha: f64, eta: f64) -> f64 {
     sum * h * h * beckmann_smith_g1(mu, alpha) / mu
 }
 
-/// [`rough_transmittance`] at `resolution` evenly spaced cosines from 0 to 1, for the GPU (a
-/// row of the transmittance LUT): computed at 65 of them and interpolated linearly between
-/// (the curve is smooth; its largest step between nodes is under 0.01).
-pub fn rough_transmittance_row(alpha: f64, eta: f64, resolution: u32) -> Vec<f32> {
-    const NODES: usize = 65;
-    let nodes: Vec<f64> = (0..NODES)
-        .map(|i| rough_transmittance(i as f64 / (NODES - 1) as f64, alpha, eta))
-        .collect();
-    let last = f64::from(resolution.max(2) - 1);
-    (0..resolution.max(2))
-        .map(|i| {
-            let x = f64::from(i) / last * (NODES - 1) as f64;
-            let k = (x.floor() as usize).min(NODES - 2);
-            let f = x - k as f64;
-            (nodes[k] * (1.0 - f) + nodes[k + 1] * f) as f32
-        })
-        .collect()
-}
-
 /// Coefficients of a degree-7 polynomial in the cosine, `sum c[k] mu^k`, that stands in for
 /// [`rough_transmittance`] on 0..=1 (least squares on 65 cosines). It is what
 /// the GPU evaluates instead of reading a LUT row: on lavapipe those reads were 14 of the
@@ -344,16 +325,6 @@ mod tests {
             let smooth = 1.0 - crate::transport::fresnel_inside(1.0 / ETA, mu);
             let ours = rough_transmittance(mu, 1e-3, ETA);
             assert!((ours - smooth).abs() < 2e-3, "cos {mu}: {ours} vs {smooth}");
-        }
-        // The GPU's row holds the same curve.
-        let row = rough_transmittance_row(ALPHA, ETA, 2048);
-        for (i, mu) in [(0usize, 0.0), (1023, 1023.0 / 2047.0), (2047, 1.0)] {
-            let exact = rough_transmittance(mu, ALPHA, ETA);
-            assert!(
-                (f64::from(row[i]) - exact).abs() < 1e-3,
-                "{mu}: {} vs {exact}",
-                row[i]
-            );
         }
         // Never more than arrives, and less toward grazing.
         let mut last = 1.0;
