@@ -5,7 +5,8 @@ renderer without global illumination leaves out (docs/fidelity.md, finding 9).
     subsurface export-mitsuba SCENE.toml --out DIR
     subsurface compare REF.exr SCENE.toml --linear OURS.exr
     python3 tools/reference/bounce_integral.py SCENE.toml DIR/scene.xml \
-        [--ours OURS.exr --reference REF.exr] [--stride 2] [--reflection-only]
+        [--ours OURS.exr --reference REF.exr] [--stride 2] [--reflection-only] \
+        [--no-visibility | --cluster MM [--ring N]]
 
 For every camera pixel on the skin (every `--stride`-th row and column) it sums the light that
 the lit surface sends it across the air: each light is traced onto the scene on a fine grid of
@@ -19,6 +20,12 @@ exported meshes). Every surface is taken to be the skin of `--albedo` / `--rough
 `--eta` (skin1's by default); `--reflection-only` keeps the lit points' reflection and drops
 their diffuse light, for a neighbour of black medium behind the same boundary. The light that
 crosses a part and leaves its unlit side (its glow) is not in it.
+
+Two options measure what a real-time gather from the shadow map would get of it:
+`--no-visibility` drops the ray test (a shadow map cannot make it), and `--cluster MM` sums
+the lit points into a flux pyramid (cells MM wide across the light, each level twice as wide)
+and gathers each shaded point from cells `--ring` to 2 `--ring` cells away at every level, as
+a few hundred texel reads per point would.
 
 Prints, per region of SCENE.regions.json (and the whole skin), the bounce's mean radiance (over
 the picked pixels) and, with --ours and --reference, the region's relative error in luminance
@@ -57,7 +64,21 @@ def parse_args(argv):
                    help="Mitsuba variant: auto (llvm_ad_rgb when libLLVM is found), llvm_ad_rgb, cuda_ad_rgb")
     p.add_argument("--reflection-only", action="store_true",
                    help="lit points only reflect (a black medium behind the same boundary)")
+    p.add_argument("--no-visibility", action="store_true",
+                   help="skip the ray test between the points (what a gather from a reflective "
+                        "shadow map, which cannot test it, would add up)")
+    p.add_argument("--cluster", type=float, default=0.0, metavar="MM",
+                   help="gather from clusters of lit points MM wide across the light instead of "
+                        "from every point, as a real-time gather from a flux pyramid of the "
+                        "shadow map would (implies --no-visibility; see --ring)")
+    p.add_argument("--ring", type=float, default=4.0,
+                   help="with --cluster: each level of the pyramid (cells twice as wide as the "
+                        "level below) serves the shaded points from `ring` to 2 `ring` of its "
+                        "cells away, the first level every cell nearer; 0 gathers every cluster "
+                        "at the finest level (default 4)")
     a = p.parse_args(argv)
+    if a.cluster > 0:
+        a.no_visibility = True
     for path in [a.toml, a.xml] + [x for x in (a.ours, a.reference) if x]:
         if not os.path.isfile(path):
             p.error(f"{path}: no such file")
@@ -65,6 +86,8 @@ def parse_args(argv):
         p.error("--stride: must be at least 1")
     if not a.grid > 0:
         p.error("--grid: must be positive")
+    if not a.cluster >= 0 or not a.ring >= 0:
+        p.error("--cluster, --ring: must not be negative")
     try:
         a.albedo = np.array([float(x) for x in a.albedo.split(",")])
         assert a.albedo.shape == (3,)
@@ -96,6 +119,67 @@ def reflection(n, l, v, alpha, eta):
     val = beckmann(np.maximum((n * h).sum(-1), 0), alpha) * f * smith_g1(nv, alpha) * smith_g1(nl, alpha) \
         / (4 * np.maximum(nv, 1e-6))
     return np.where((nl > 0) & (nv > 0) & (hl > 1e-6), val, 0.0)
+
+
+class Senders:
+    """The lit points as a flux pyramid: level k groups the points of cells `base` x 2^k grid
+    steps wide, and keeps per cell its flux (`wd`: what the light delivers, which it sends on
+    diffusely), the flux-weighted position and normal sum (a cell's cosines toward a direction
+    add up linearly while none is negative), and for the boundary's reflection the points'
+    flux over their cosine (`ws`) with their mean normal and light direction."""
+
+    def __init__(self, x, n, l, wd, ws, ij, base, ring):
+        self.levels, self.ring = [], ring
+        span = int(ij.max()) + 2
+        k = 0
+        while True:
+            size = base << k
+            key = (ij[:, 0] // size) * (span // size + 2) + ij[:, 1] // size
+            cells, inv = np.unique(key, return_inverse=True)
+
+            def total(v):
+                out = np.zeros((len(cells),) + v.shape[1:])
+                np.add.at(out, inv, v)
+                return out
+
+            def unit(v):
+                return v / np.maximum(np.linalg.norm(v, axis=-1), 1e-30)[:, None]
+
+            w = total(wd)
+            self.levels.append(dict(
+                size=size, wd=w, ws=total(ws), nd=total(n * wd[:, None]),
+                x=total(x * wd[:, None]) / np.maximum(w, 1e-30)[:, None],
+                ij=total(ij * wd[:, None]) / np.maximum(w, 1e-30)[:, None],
+                n=unit(total(n * ws[:, None])), l=unit(total(l * ws[:, None]))))
+            if ring == 0 or len(cells) == 1:
+                break
+            k += 1
+
+    def gather(self, p, np_, v, at, diffuse, a):
+        """The bounce at shaded points p (normals np_, views v; `at`: their places on the
+        grid), per unit of the light's colour."""
+        out = np.zeros((len(p), 3))
+        last = len(self.levels) - 1
+        for k, c in enumerate(self.levels):
+            r = np.linalg.norm(at[:, None, :] - c["ij"][None], axis=-1) / c["size"]
+            near = np.ones(r.shape, bool) if k == last else r < 2 * self.ring
+            far = np.ones(r.shape, bool) if k == 0 else r >= self.ring
+            off = p[:, None, :] - c["x"][None]
+            d2 = (off * off).sum(-1)
+            wv = off / np.sqrt(np.maximum(d2, 1e-30))[..., None]
+            cos_p = -(np_[:, None] * wv).sum(-1)
+            i, j = np.nonzero(near & far & (cos_p > 0) & (d2 > 0))
+            if len(i) == 0:
+                continue
+            wij = wv[i, j]
+            cos_d = np.maximum((c["nd"][j] * wij).sum(-1), 0.0)
+            cos_s = np.maximum((c["n"][j] * wij).sum(-1), 0.0)
+            sent = diffuse[None] * cos_d[:, None] \
+                + (c["ws"][j] * reflection(c["n"][j], c["l"][j], wij, a.roughness, a.eta) * cos_s)[:, None]
+            taken = a.albedo[None] * cos_p[i, j][:, None] / math.pi \
+                + reflection(np_[i], -wij, v[i], a.roughness, a.eta)[:, None] / math.pi
+            np.add.at(out, i, sent * taken / d2[i, j][:, None])
+        return out
 
 
 def rows(a):
@@ -162,6 +246,7 @@ def main(argv):
             np.linalg.norm(np.array(scene.bbox().extents()))
         n = int(2 * half / (a.grid * mm)) + 1
         gx, gy = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n))
+        gij = np.stack(np.meshgrid(np.arange(n), np.arange(n)), -1).reshape(-1, 2)
         across = gx.ravel()[:, None] * side + gy.ravel()[:, None] * up
         if kind == "spot":
             d = axis + across / reach
@@ -184,15 +269,32 @@ def main(argv):
             cos_outer = math.cos(math.radians(light.get("outer_angle_deg", 30.0)))
             cos_inner = math.cos(math.radians(light.get("inner_angle_deg", 20.0)))
             s = np.clip(((d[ok] * axis).sum(-1) - cos_outer) / (cos_inner - cos_outer), 0, 1)
-            irr = (s * s * (3 - 2 * s) / (t * t))[:, None] * colour  # radiance x 1/d^2, per unit area across
+            fall = s * s * (3 - 2 * s) / (t * t)  # radiance x 1/d^2, per unit area across
             area = cell[ok] * t * t / np.maximum(cos_i, 1e-3)
         else:
-            irr = np.repeat(colour[None], len(x), 0)
+            fall = np.ones(len(x))
             area = cell[ok] / np.maximum(cos_i, 1e-3)
         keep = cos_i > 1e-3
-        x, nx, to_light, cos_i, irr, area = x[keep], nx[keep], to_light[keep], cos_i[keep], irr[keep], area[keep]
+        x, nx, to_light, cos_i, fall, area = x[keep], nx[keep], to_light[keep], cos_i[keep], fall[keep], area[keep]
+        irr = fall[:, None] * colour
         diffuse = np.zeros(3) if a.reflection_only else a.albedo
         print(f"{light.get('kind')} light: {len(x)} lit points", file=sys.stderr)
+        if a.cluster > 0:
+            def grid_of(q):
+                # The shaded points' places on the light's grid, in grid steps.
+                if kind == "spot":
+                    rel = q - pos
+                    q = rel / (rel @ axis)[:, None] * reach
+                else:
+                    q = q - target
+                return np.stack([q @ side, q @ up], -1) / (2 * half) * (n - 1) + (n - 1) / 2
+            senders = Senders(x, nx, to_light, fall * cos_i * area, fall * area, gij[ok][keep],
+                              max(int(round(a.cluster / a.grid)), 1), a.ring)
+            for k in range(0, len(shaded), 64):
+                px = shaded[k:k + 64]
+                bounce[px] += colour[None] * senders.gather(points[px], normals[px], views[px],
+                                                            grid_of(points[px]), diffuse, a)
+            continue
         for k in range(0, len(shaded), 64):
             px = shaded[k:k + 64]
             p, np_, v = points[px], normals[px], views[px]
@@ -210,7 +312,7 @@ def main(argv):
             o = x[j] + nx[j] * 1e-3 * mm
             dist = np.sqrt(d2[i, j])
             test = mi.Ray3f(mi.Ray3f(mi.Point3f(*o.T), mi.Vector3f(*wij.T)), mi.Float(np.maximum(dist - mm, 1e-9)))
-            seen = ~np.array(scene.ray_test(test))
+            seen = np.ones(len(i), bool) if a.no_visibility else ~np.array(scene.ray_test(test))
             i, j, wij = i[seen], j[seen], wij[seen]
             solid = cos_x[i, j] * area[j] / d2[i, j]
             sent = irr[j] * (reflection(nx[j], to_light[j], wij, a.roughness, a.eta)[:, None]
