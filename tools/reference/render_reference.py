@@ -2,7 +2,8 @@
 """Path-traced reference of a scene exported by `subsurface export-mitsuba`.
 
     python3 tools/reference/render_reference.py EXPORT_DIR/scene.xml --out ref.exr \
-        [--spp 128] [--seed 0] [--width W --height H] [--max-depth 256] [--variant auto]
+        [--spp 128] [--seed 0] [--width W --height H] [--max-depth 256] [--variant auto] \
+        [--no-bounce]
 
 Needs Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`). `--variant auto` (the default) takes
 `llvm_ad_rgb`, which JIT-compiles the path tracer and runs several times faster, when an LLVM
@@ -27,6 +28,11 @@ mean falls short of its expectation for any sample count one can afford, and who
 underestimates its own error. Measured on a 10 mm slab of skin1 lit from behind: red 0.72 to
 0.80 (standard errors 3-4 %, 8192 and 32768 samples) rendered chromatic, 0.952 (0.8 %, 8192
 samples) rendered grey, where exact slab transport (adding-doubling) predicts 0.91 to 1.02.
+
+`--no-bounce` renders the scene without light between parts (no_bounce.py): a path ends where,
+after leaving a surface into the air, it reaches another surface. What is left is what a
+renderer without global illumination computes; the difference from the full reference is the
+light one part sends another (docs/fidelity.md, finding 9). It needs a vectorised variant.
 """
 
 import argparse
@@ -51,6 +57,9 @@ def parse_args(argv):
                         "scalar_rgb, llvm_ad_rgb, cuda_ad_rgb")
     p.add_argument("--per-channel", dest="per_channel", action=argparse.BooleanOptionalAction, default=True,
                    help="render chromatic media one channel at a time, each grey (default; see above)")
+    p.add_argument("--no-bounce", action="store_true",
+                   help="end a path where it reaches a surface through the air after a surface "
+                        "event: no light between parts (no_bounce.py; llvm_ad_rgb or cuda_ad_rgb)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     a = p.parse_args(argv)
     for k in ("spp", "pass_spp"):
@@ -122,6 +131,16 @@ def render(a):
     if a.max_depth:
         params["max_depth"] = a.max_depth
     scene = mi.load_file(a.scene, **params)
+    integrator = None
+    if a.no_bounce:
+        if a.variant.startswith("scalar"):
+            raise RuntimeError("--no-bounce: needs llvm_ad_rgb (install libllvm19) or cuda_ad_rgb")
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import no_bounce
+
+        no_bounce.register()
+        # The exporter's volpath settings (export_mitsuba.rs): max_depth 256, rr_depth 64.
+        integrator = mi.load_dict({"type": "volpath_nobounce", "max_depth": a.max_depth or 256, "rr_depth": 64})
     scene_params = mi.traverse(scene)
     media = chromatic_media(mi, scene_params) if a.per_channel else []
     # One render per channel with every medium grey at that channel's coefficients (see the
@@ -145,11 +164,15 @@ def render(a):
         for i in range(passes):
             n = min(a.pass_spp, a.spp - done)
             # Distinct, deterministic seeds per pass: the sum is one render of a.spp samples.
-            img = mi.render(scene, spp=n, seed=a.seed * 1000003 + i)
+            img = mi.render(scene, integrator=integrator, spp=n, seed=a.seed * 1000003 + i)
             # Plain Dr.Jit tensors (no numpy needed). Equal passes: the mean of the passes is
             # the render of a.spp samples, and their spread estimates its noise.
             acc = img if acc is None else acc + img
             acc2 = img * img if acc2 is None else acc2 + img * img
+            # A Python integrator (--no-bounce) returns the image unevaluated, and the LLVM
+            # backend launches kernels asynchronously: finish each pass before reporting it.
+            dr.eval(acc, acc2)
+            dr.sync_thread()
             done += n
             done_all += n
             if not a.quiet:
