@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes docs/fidelity.md (the error of every method x canonical scene against the committed
-path-traced references), references/fidelity.json (the values the regression guard in
+path-traced references, and the default method's against those rendered without light between
+parts, references/no-bounce/), references/fidelity.json (the values the regression guard in
 crates/subsurface-cli/tests/fidelity.rs checks against) and references/compare/*.png.
 
     python3 tools/reference/fidelity_table.py
@@ -29,6 +30,8 @@ COMBOS = [("none", "off")] + [(s, "diffusion") for s in ("none", "gaussian6", "s
 ]
 # Side-by-side images kept in the repository (the others go to a temporary directory).
 KEEP_IMAGES = {("none", "off"), ("separable", "paper"), ("separable", "diffusion")}
+# The default method (`subsurface render` with no flags).
+DEFAULT = ("separable", "diffusion")
 
 
 def main():
@@ -88,13 +91,36 @@ def main():
                     }
                 print(f"{name:16} {key:22} RMSE {j['rmse']:.4f} debiased {j['rmse_debiased']} FLIP {j['flip_mean']:.4f} "
                       + " ".join(f"{g['name']} {100 * g['rel_error']:+.1f}%" for g in j["regions"]), file=sys.stderr)
+        # The default method against the references without light between parts
+        # (render_reference.py --no-bounce): what this renderer models, like with like.
+        no_bounce = {}
+        for path in sorted(glob.glob(os.path.join(ROOT, "references/no-bounce/*.exr"))):
+            if path.endswith(".stderr.exr"):
+                continue
+            name = os.path.basename(path)[:-4]
+            r = subprocess.run(
+                [exe, "compare", path, os.path.join(ROOT, "scenes/canonical", name + ".toml"),
+                 "--sss", DEFAULT[0], "--transmittance", DEFAULT[1], "--json", "--out", os.path.join(tmp, "x.png")],
+                capture_output=True, text=True, env=env)
+            if r.returncode != 0:
+                sys.exit(f"no-bounce/{name}: {r.stderr.strip()}")
+            j = json.loads(r.stdout)
+            full = results.get(name, {}).get("+".join(DEFAULT), {}).get("regions", {})
+            no_bounce[name] = {
+                "regions": {g["name"]: g["rel_error"] for g in j["regions"]},
+                "regions_stderr": {g["name"]: g["rel_stderr"] for g in j["regions"]},
+                "regions_full": full,
+            }
+            print(f"no-bounce/{name:16} " + " ".join(f"{g['name']} {100 * g['rel_error']:+.1f}%" for g in j["regions"]),
+                  file=sys.stderr)
     with open(os.path.join(ROOT, "references/fidelity.json"), "w") as f:
-        json.dump({"generated_by": "tools/reference/fidelity_table.py", "scenes": results}, f, indent=1)
+        json.dump({"generated_by": "tools/reference/fidelity_table.py", "scenes": results, "no_bounce": no_bounce},
+                  f, indent=1)
         f.write("\n")
-    write_markdown(results)
+    write_markdown(results, no_bounce)
 
 
-def write_markdown(results):
+def write_markdown(results, no_bounce):
     path = os.path.join(ROOT, "docs/fidelity.md")
     with open(path) as f:
         text = f.read()
@@ -167,6 +193,23 @@ def write_markdown(results):
                 lines.append("")
                 lines.append(f"![{name} {key}](../{v['image']})")
                 lines.append("")
+    if no_bounce:
+        lines.append("### Without light between parts")
+        lines.append("")
+        lines.append(f"`{'+'.join(DEFAULT)}` against the references rendered without light between parts "
+                     "(`references/no-bounce/`, `render_reference.py --no-bounce`), beside its error against the "
+                     "full references above: region means, ± one standard error of the reference's mean.")
+        lines.append("")
+        lines.append("| scene | region | against the full reference | without light between parts |")
+        lines.append("|---|---|---:|---:|")
+        for name, v in no_bounce.items():
+            for r, e in v["regions"].items():
+                se = v["regions_stderr"].get(r)
+                full = v["regions_full"].get(r)
+                full = "–" if full is None else f"{100 * full:+.1f}%"
+                now = "n/a" if e is None else f"{100 * e:+.1f}%" + (f" ±{100 * se:.1f}" if se is not None else "")
+                lines.append(f"| {name} | {r} | {full} | {now} |")
+        lines.append("")
     lines.append(end)
     if begin in text and end in text:
         text = text[: text.index(begin)] + "\n".join(lines) + text[text.index(end) + len(end):]
