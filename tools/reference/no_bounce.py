@@ -1,3 +1,33 @@
+# The sample() below is adapted from Mitsuba 3.9.1's python/ad/integrators/prbvolpath.py,
+# distributed under this license:
+#
+# Copyright (c) 2017 Wenzel Jakob <wenzel.jakob@epfl.ch>, All rights reserved.
+#
+# Redistribution and use in source and binary forms, with or without
+# modification, are permitted provided that the following conditions are met:
+#
+# 1. Redistributions of source code must retain the above copyright notice, this
+#    list of conditions and the following disclaimer.
+#
+# 2. Redistributions in binary form must reproduce the above copyright notice,
+#    this list of conditions and the following disclaimer in the documentation
+#    and/or other materials provided with the distribution.
+#
+# 3. Neither the name of the copyright holder nor the names of its contributors
+#    may be used to endorse or promote products derived from this software
+#    without specific prior written permission.
+#
+# THIS SOFTWARE IS PROVIDED BY THE COPYRIGHT HOLDERS AND CONTRIBUTORS "AS IS" AND
+# ANY EXPRESS OR IMPLIED WARRANTIES, INCLUDING, BUT NOT LIMITED TO, THE IMPLIED
+# WARRANTIES OF MERCHANTABILITY AND FITNESS FOR A PARTICULAR PURPOSE ARE
+# DISCLAIMED. IN NO EVENT SHALL THE COPYRIGHT HOLDER OR CONTRIBUTORS BE LIABLE
+# FOR ANY DIRECT, INDIRECT, INCIDENTAL, SPECIAL, EXEMPLARY, OR CONSEQUENTIAL
+# DAMAGES (INCLUDING, BUT NOT LIMITED TO, PROCUREMENT OF SUBSTITUTE GOODS OR
+# SERVICES; LOSS OF USE, DATA, OR PROFITS; OR BUSINESS INTERRUPTION) HOWEVER
+# CAUSED AND ON ANY THEORY OF LIABILITY, WHETHER IN CONTRACT, STRICT LIABILITY,
+# OR TORT (INCLUDING NEGLIGENCE OR OTHERWISE) ARISING IN ANY WAY OUT OF THE USE
+# OF THIS SOFTWARE, EVEN IF ADVISED OF THE POSSIBILITY OF SUCH DAMAGE.
+
 """A volumetric path tracer without light between parts: a path ends where, after leaving a
 surface into the air, it reaches another surface. What is left is what a real-time renderer
 without global illumination computes: light that reaches the surface point the camera sees
@@ -7,10 +37,9 @@ glow on its neighbour, a reflection off a cheek into the nose's shadow) is left 
 light that leaves the medium and enters it again elsewhere, even on the same mesh, with it.
 
 `render_reference.py --no-bounce` renders with it (docs/fidelity.md, finding 9). It is the
-primal part of Mitsuba 3.9.1's `prbvolpath` integrator (BSD-3-Clause, Copyright (c) 2021
-Wenzel Jakob and the Mitsuba 3 developers), with that one rule added; on a scene where no
-path can leave one surface and reach another (a single convex part) it renders what
-`volpath` does.
+primal part of Mitsuba 3.9.1's `prbvolpath` integrator (its license above), with that one
+rule added; on a scene where no path can leave one surface and reach another (a single convex
+part) it renders what `volpath` does.
 """
 
 import drjit as dr
