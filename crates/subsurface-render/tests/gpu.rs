@@ -350,6 +350,24 @@ fn timestamps_report_each_pass() {
     }
 }
 
+/// The frame `r` draws after `update(scene, opts)`, and the frame a new renderer draws from the
+/// same scene and options.
+fn update_and_fresh(
+    ctx: &subsurface_render::GpuContext,
+    r: &mut Renderer,
+    scene: &subsurface_render::Scene,
+    opts: &subsurface_render::RenderOptions,
+) -> (image::RgbaImage, image::RgbaImage) {
+    r.update(scene, opts).unwrap();
+    let updated = r.render().unwrap().image;
+    let fresh = Renderer::new(ctx, scene, opts.clone())
+        .unwrap()
+        .render()
+        .unwrap()
+        .image;
+    (updated, fresh)
+}
+
 /// `Renderer::update` (the viewer's path for every edit) gives the same image as a renderer
 /// created from scratch with the edited scene and options.
 #[test]
@@ -365,13 +383,7 @@ fn update_matches_a_fresh_renderer() {
     r.render().unwrap();
     opts.settings.sss.method = SssMethod::Gaussian6;
     opts.settings.exposure_ev = 0.5;
-    r.update(&edited, &opts).unwrap();
-    let updated = r.render().unwrap().image;
-    let fresh = Renderer::new(&ctx, &edited, opts)
-        .unwrap()
-        .render()
-        .unwrap()
-        .image;
+    let (updated, fresh) = update_and_fresh(&ctx, &mut r, &edited, &opts);
     assert_eq!(
         updated.as_raw(),
         fresh.as_raw(),
@@ -394,13 +406,7 @@ fn update_builds_the_pipeline_of_a_new_transmittance_method() {
     let paper = r.render().unwrap().image;
     let mut diffusion_opts = opts.clone();
     diffusion_opts.settings.transmittance.method = TransmittanceMethod::Diffusion;
-    r.update(&scene, &diffusion_opts).unwrap();
-    let updated = r.render().unwrap().image;
-    let fresh = Renderer::new(&ctx, &scene, diffusion_opts)
-        .unwrap()
-        .render()
-        .unwrap()
-        .image;
+    let (updated, fresh) = update_and_fresh(&ctx, &mut r, &scene, &diffusion_opts);
     assert_ne!(
         paper.as_raw(),
         fresh.as_raw(),
