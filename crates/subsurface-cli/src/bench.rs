@@ -69,6 +69,11 @@ pub struct BenchArgs {
     /// texel per 4x4 pixels).
     #[arg(long, value_delimiter = ',', value_name = "MM,..")]
     pub lateral_texel_mm: Vec<f32>,
+    /// The bounce's ring (0..=8; 0 = off), comma-separated, e.g. 0,2 for what gathering the
+    /// light between parts costs [default: the scene's render.bounce.ring]. The table names
+    /// each run's ring after its transmittance (`paper b2`).
+    #[arg(long, value_delimiter = ',', value_name = "N,..")]
+    pub bounce_ring: Vec<u32>,
     /// Numbers of distinct diffusion profiles on screen, comma-separated: the objects (with
     /// --characters, the copies) take the material presets in turn, so the cost of a profile
     /// per material shows beside one profile for all.
@@ -160,6 +165,8 @@ struct Run {
     lateral_texel_mm: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     lateral_downsample: Option<u32>,
+    /// The bounce's ring (0: none).
+    bounce_ring: u32,
     /// Median frame time (sum of the passes, copy baseline excluded).
     frame_ms: f64,
     /// `--rounds`: each round's median frame time, in the order they ran.
@@ -186,10 +193,14 @@ impl Run {
     /// The transmittance as the table names it: `diffusion/12:4` for diffusion with 12 lateral
     /// taps once per 4x4 pixels, so that `--lateral-taps 0,12` shows two rows.
     fn transmittance_label(&self) -> String {
-        match (self.lateral_taps, self.lateral_downsample) {
+        let label = match (self.lateral_taps, self.lateral_downsample) {
             (Some(taps), Some(d)) => format!("{}/{taps}:{d}", self.transmittance),
             (Some(taps), None) => format!("{}/{taps}", self.transmittance),
             _ => self.transmittance.clone(),
+        };
+        match self.bounce_ring {
+            0 => label,
+            ring => format!("{label} b{ring}"),
         }
     }
 }
@@ -374,12 +385,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         t.validate()
             .map_err(|e| anyhow::anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
     }
+    let rings: Vec<Option<u32>> = if args.bounce_ring.is_empty() {
+        vec![None]
+    } else {
+        args.bounce_ring.iter().map(|r| Some(*r)).collect()
+    };
+    for ring in rings.iter().flatten() {
+        subsurface_render::BounceSettings {
+            ring: *ring,
+            ..Default::default()
+        }
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--bounce-ring: {}", e.message))?;
+    }
     let configs = sizes.len()
         * light_counts.len()
         * args.characters.len()
         * args.profiles.len()
         * args.sss.len()
         * args.fetch.len()
+        * rings.len()
         * args
             .transmittance
             .iter()
@@ -420,11 +445,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 let transmittances = args.transmittance.iter().flat_map(|tm| {
                     lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm)
                         .into_iter()
-                        .map(move |(taps, mm)| (*tm, taps, mm))
+                        .flat_map(|(taps, mm)| rings.iter().map(move |r| (taps, mm, *r)))
+                        .map(move |(taps, mm, ring)| (*tm, taps, mm, ring))
                 });
-                for (tm, taps, texel_mm) in transmittances {
+                for (tm, taps, texel_mm, ring) in transmittances {
                     let mut opts = RenderOptions::from_scene(&scene);
                     let s = &mut opts.settings;
+                    if let Some(ring) = ring {
+                        s.bounce.ring = ring;
+                    }
                     if let Some(taps) = taps {
                         s.transmittance.lateral_taps = taps;
                     }
@@ -488,6 +517,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 run.lateral_downsample = Some(renderer.targets.lateral_downsample());
             }
             run.profiles = renderer.profile_table().kernels.len() as u32;
+            run.bounce_ring = opts.settings.bounce.ring;
             run.lights = plan.lights;
             (run.samples, run.jitter) = (args.samples, args.jitter);
             run.fetch = plan.fetch.name();
@@ -599,6 +629,7 @@ fn summarise(
         lateral_taps: None,
         lateral_texel_mm: None,
         lateral_downsample: None,
+        bounce_ring: 0,
         frame_ms,
         round_frame_ms: Vec::new(),
         passes,
@@ -625,7 +656,7 @@ fn table(report: &Report) -> String {
         )
     };
     out += &format!(
-        "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>14} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
+        "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>17} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
         "chars",
         "profiles",
         "lights",
@@ -636,6 +667,7 @@ fn table(report: &Report) -> String {
         "frame ms",
         "shadow",
         "lateral",
+        "bounce",
         "lighting",
         "sss ms",
         "sss/copy"
@@ -644,7 +676,7 @@ fn table(report: &Report) -> String {
         let p = |n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
         let sss = sss_ms(&r.passes);
         out += &format!(
-            "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>14} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
+            "{:>5} {:>8} {:>6} {:>10} {:>10} {:>9} {:>17} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
             r.characters,
             r.profiles,
             r.lights,
@@ -655,6 +687,7 @@ fn table(report: &Report) -> String {
             r.frame_ms,
             p("shadow"),
             p("lateral"),
+            p("bounce build") + p("bounce"),
             p("lighting"),
             sss,
             r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
@@ -684,8 +717,17 @@ fn per_light(report: &Report) -> String {
     let same = |a: &Run, b: &Run| {
         (a.characters, a.profiles, a.width, a.height, a.sss, a.fetch)
             == (b.characters, b.profiles, b.width, b.height, b.sss, b.fetch)
-            && (&a.transmittance, a.lateral_taps, a.lateral_downsample)
-                == (&b.transmittance, b.lateral_taps, b.lateral_downsample)
+            && (
+                &a.transmittance,
+                a.lateral_taps,
+                a.lateral_downsample,
+                a.bounce_ring,
+            ) == (
+                &b.transmittance,
+                b.lateral_taps,
+                b.lateral_downsample,
+                b.bounce_ring,
+            )
     };
     let pass = |r: &Run, n: &str| r.passes.iter().find(|p| p.name == n).map_or(0.0, |p| p.ms);
     for (i, r) in report.runs.iter().enumerate() {

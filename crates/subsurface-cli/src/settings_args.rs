@@ -97,6 +97,15 @@ pub struct SettingsArgs {
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
     pub normal_shrink: Option<f32>,
+    /// The light lit parts send each other across the air, gathered from a flux pyramid of
+    /// the shadow maps: each level is read from N to 2N of its cells away from the point
+    /// (0..=8, about 9.4 N^2 reads a level); 0 = off [default: render.bounce.ring, 2].
+    #[arg(long, value_name = "N")]
+    pub bounce_ring: Option<u32>,
+    /// Width of the finest flux-pyramid cells the bounce reads, profile millimetres
+    /// (0.1..=50) [default: render.bounce.cell_mm, 2].
+    #[arg(long, value_name = "MM")]
+    pub bounce_cell_mm: Option<f32>,
 }
 
 /// The flag that sets a `[render]` field (`sss.samples` -> `--samples`), for error messages.
@@ -104,6 +113,8 @@ fn flag_of(field: &str) -> String {
     let leaf = match field {
         "sss.method" => "sss",
         "transmittance.method" => "transmittance",
+        "bounce.ring" => "bounce_ring",
+        "bounce.cell_mm" => "bounce_cell_mm",
         f => f.rsplit('.').next().unwrap_or(f),
     };
     let leaf = leaf.split('[').next().unwrap_or(leaf);
@@ -135,6 +146,8 @@ impl SettingsArgs {
         set!(self.lateral_taps, r.transmittance.lateral_taps);
         set!(self.lateral_texel_mm, r.transmittance.lateral_texel_mm);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
+        set!(self.bounce_ring, r.bounce.ring);
+        set!(self.bounce_cell_mm, r.bounce.cell_mm);
         if self.jitter {
             r.sss.jitter = true;
         }
@@ -278,6 +291,8 @@ mod tests {
         assert_eq!(flag_of("transmittance.normal_shrink"), "--normal-shrink");
         assert_eq!(flag_of("exposure_ev"), "--exposure-ev");
         assert_eq!(flag_of("ambient[1]"), "--ambient");
+        assert_eq!(flag_of("bounce.ring"), "--bounce-ring");
+        assert_eq!(flag_of("bounce.cell_mm"), "--bounce-cell-mm");
     }
 
     #[test]

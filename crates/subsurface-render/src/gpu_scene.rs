@@ -364,8 +364,10 @@ pub fn lateral_downsample(
     height: u32,
 ) -> u32 {
     let t = &settings.transmittance;
-    if t.method != crate::settings::TransmittanceMethod::Diffusion
-        || t.lateral_taps == 0
+    let taps = t.method == crate::settings::TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+    // The bounce is gathered on the same map (passes::bounce): it too changes over
+    // millimetres.
+    if !(taps || settings.bounce.enabled())
         || settings.sss.method == crate::settings::SssMethod::Texture
     {
         return 1;
@@ -471,6 +473,22 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
         uniform.lights[i] = u;
         layers.extend(light_layers);
     }
+    // Point lights' six faces are not gathered (bounce.wgsl): only the others count.
+    let bounced = scene
+        .desc
+        .lights
+        .iter()
+        .any(|l| l.shadow_map_size > 0 && l.kind != LightKind::Point);
+    if settings.bounce.enabled()
+        && bounced
+        && settings.sss.method != crate::settings::SssMethod::Texture
+    {
+        uniform.bounce_ring = settings.bounce.ring;
+        uniform.bounce_cell_mm = settings.bounce.cell_mm;
+    }
+    uniform.bounce_layer = crate::passes::lighting::lateral_lights(&uniform)
+        .last()
+        .map_or(0, |&l| l + 1);
     Ok(LightSetup {
         uniform,
         layers,
@@ -606,14 +624,19 @@ mod tests {
         assert_eq!(downsample(&scene, &per_pixel, 512, 512), 1);
     }
 
-    /// No map where nothing reads it: other transmittance methods, no taps, texture-space
-    /// diffusion (its transmitted light comes from UV space), no translucent object in view.
+    /// No map where nothing reads it: other transmittance methods without the bounce, no
+    /// taps, texture-space diffusion (its transmitted light comes from UV space), no
+    /// translucent object in view.
     #[test]
     fn no_lateral_map_where_nothing_reads_it() {
         let scene = Scene::default_scene();
-        let s = scene.desc.render.clone();
+        let mut s = scene.desc.render.clone();
         let mut paper = s.clone();
         paper.transmittance.method = TransmittanceMethod::Paper;
+        // The bounce alone is gathered on the map.
+        assert_eq!(downsample(&scene, &paper, 512, 512), 6);
+        s.bounce = crate::settings::BounceSettings::OFF;
+        paper.bounce = crate::settings::BounceSettings::OFF;
         let mut no_taps = s.clone();
         no_taps.transmittance.lateral_taps = 0;
         let mut texture = s.clone();

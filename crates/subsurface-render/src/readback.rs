@@ -9,7 +9,21 @@ pub fn read_texture_layer(
     texture: &wgpu::Texture,
     layer: u32,
 ) -> Result<Vec<u8>, RenderError> {
-    let (w, h) = (texture.width(), texture.height());
+    read_texture_level(ctx, texture, layer, 0)
+}
+
+/// Reads mip `level`, layer `layer` of a texture (`max(size >> level, 1)` texels a side);
+/// returns tightly packed rows.
+pub fn read_texture_level(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    layer: u32,
+    level: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (
+        (texture.width() >> level).max(1),
+        (texture.height() >> level).max(1),
+    );
     let texel = texture.format().block_copy_size(None).ok_or_else(|| {
         RenderError::Readback(format!("format {:?} cannot be copied", texture.format()))
     })?;
@@ -26,7 +40,7 @@ pub fn read_texture_layer(
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
-            mip_level: 0,
+            mip_level: level,
             origin: wgpu::Origin3d {
                 x: 0,
                 y: 0,

@@ -7,6 +7,7 @@ use crate::error::RenderError;
 use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
 use crate::material::{MaterialCache, ProfileTable};
+use crate::passes::bounce::FluxPyramid;
 use crate::passes::copy::CopyPass;
 use crate::passes::lighting::{self, LateralShape, LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
@@ -66,6 +67,8 @@ pub struct Renderer {
     object_layout: wgpu::BindGroupLayout,
     objects: Vec<GpuObject>,
     shadow: ShadowPass,
+    /// The shadow maps' flux pyramid, where the bounce is gathered.
+    bounce: Option<FluxPyramid>,
     lighting: LightingPass,
     sss: SssPass,
     copy: Option<CopyPass>,
@@ -143,6 +146,42 @@ fn shadow_signature(lights: &gpu_scene::LightSetup) -> Vec<(usize, u32)> {
     v
 }
 
+/// The flux pyramid of `shadow` where `lights` asks for the bounce; where the device cannot
+/// build one the bounce is turned off in `lights`.
+fn flux_pyramid(
+    ctx: &GpuContext,
+    shadow: &ShadowPass,
+    lights: &mut gpu_scene::LightSetup,
+) -> Option<FluxPyramid> {
+    if lights.uniform.bounce_ring == 0 {
+        return None;
+    }
+    if !FluxPyramid::supported(&ctx.device) {
+        log::warn!("bounce: this adapter has no compute storage textures; rendering without it");
+        lights.uniform.bounce_ring = 0;
+        return None;
+    }
+    Some(FluxPyramid::new(
+        ctx,
+        &shadow.atlas_view,
+        &lights.layers,
+        lights.atlas_size,
+        &lights.uniform,
+    ))
+}
+
+/// The shadow maps the lighting pass binds, with `bounce`'s flux pyramid.
+fn shadow_maps<'a>(
+    shadow: &'a ShadowPass,
+    bounce: &'a Option<FluxPyramid>,
+) -> lighting::ShadowMaps<'a> {
+    let mut maps = shadow.maps();
+    maps.flux = bounce
+        .as_ref()
+        .map(|b| [&b.position_view, &b.normal_view, &b.spread_view]);
+    maps
+}
+
 fn thickness_flag(view: DebugView) -> u32 {
     (view == DebugView::Thickness) as u32
 }
@@ -217,6 +256,7 @@ impl Renderer {
             lights.atlas_size,
             &kinds,
         )?;
+        let bounce = flux_pyramid(ctx, &shadow, &mut lights);
         let camera = gpu_scene::camera_uniform(scene, options.width(), options.height());
         let maps_layout = texture_space::maps_layout(device);
         let settings = texture_settings(&options);
@@ -230,7 +270,7 @@ impl Renderer {
             &maps_layout,
             &camera,
             &lights.uniform,
-            shadow.maps(),
+            shadow_maps(&shadow, &bounce),
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
@@ -264,6 +304,7 @@ impl Renderer {
             object_layout,
             objects,
             shadow,
+            bounce,
             lighting,
             copy,
             sss,
@@ -350,6 +391,14 @@ impl Renderer {
         } else {
             self.shadow.update_layers(&queue, &lights.layers, &kinds);
         }
+        let had_bounce = self.bounce.is_some();
+        match &self.bounce {
+            Some(b) if !rebuild_shadows && lights.uniform.bounce_ring > 0 => {
+                b.update(&queue, &lights.layers, &lights.uniform)
+            }
+            _ => self.bounce = flux_pyramid(&self.ctx, &self.shadow, &mut lights),
+        }
+        let new_bounce = rebuild_shadows || had_bounce != self.bounce.is_some();
         let had_tsm = self.tsm.is_some();
         match (&mut self.tsm, settings.tsm) {
             (Some(tsm), true) if !rebuild_shadows => tsm.update_layers(&queue, &lights.layers),
@@ -368,7 +417,7 @@ impl Renderer {
         // The lighting pass binds the shadow atlas and translucent shadow maps: rebuilt only
         // when those are new, else a camera or light move is two buffer writes (the viewer
         // calls this on every mouse drag).
-        let new_maps = rebuild_shadows || had_tsm != settings.tsm || (settings.tsm && !had_tsm);
+        let new_maps = new_bounce || had_tsm != settings.tsm || (settings.tsm && !had_tsm);
         if !new_maps {
             // The uniforms and, for another transmittance method, its pipeline.
             self.lighting.prepare(&self.ctx, &camera, &lights.uniform);
@@ -379,7 +428,7 @@ impl Renderer {
                 &self.maps_layout,
                 &camera,
                 &lights.uniform,
-                self.shadow.maps(),
+                shadow_maps(&self.shadow, &self.bounce),
                 self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
             );
         }
@@ -452,6 +501,11 @@ impl Renderer {
         self.shadow.layer_count()
     }
 
+    /// The shadow maps' flux pyramid, where the bounce is gathered (`passes::bounce`).
+    pub fn flux_pyramid(&self) -> Option<&FluxPyramid> {
+        self.bounce.as_ref()
+    }
+
     /// The shadow atlas (R32Float array of linear light distances).
     pub fn shadow_atlas(&self) -> &wgpu::Texture {
         &self.shadow.atlas
@@ -471,6 +525,9 @@ impl Renderer {
     pub fn encode_scene(&self, encoder: &mut wgpu::CommandEncoder) {
         let p = Some(&self.profiler);
         self.shadow.encode(encoder, &self.objects, p);
+        if let Some(bounce) = &self.bounce {
+            bounce.encode(encoder, p);
+        }
         if let Some(tsm) = &self.tsm {
             tsm.encode(encoder, &self.objects, p);
         }

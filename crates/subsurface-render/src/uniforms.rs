@@ -66,7 +66,14 @@ pub struct LightsUniform {
     /// 1: the lateral taps run per pixel; N > 1: the lighting pass reads them from the lateral
     /// map at 1/N resolution (`passes::lighting::LateralTargets`).
     pub lateral_downsample: u32,
-    pub _pad: u32,
+    /// The lateral map's layer that holds the bounce gathered at its texels
+    /// (`passes::bounce`).
+    pub bounce_layer: u32,
+    /// `BounceSettings::ring`: 0 = no bounce.
+    pub bounce_ring: u32,
+    /// `BounceSettings::cell_mm`: the finest cells read, profile millimetres.
+    pub bounce_cell_mm: f32,
+    pub _pad: [u32; 2],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 

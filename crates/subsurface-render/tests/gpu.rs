@@ -458,7 +458,8 @@ fn update_follows_the_lateral_map_reduction() {
 /// The lateral pass fills two lights a pass; the passes after the first shade only the
 /// surfaces the first found nearest. The default scene's two lights copied twice (four
 /// shadowed lights, two passes): each copy's layer of the lateral map must hold what its
-/// original's holds, texel for texel, and hold taps.
+/// original's holds, texel for texel, and hold taps. The bounce pass fills the layer after
+/// theirs, on the same surfaces.
 #[test]
 fn every_lateral_pass_fills_its_lights_layers() {
     let Some(ctx) = context() else { return };
@@ -468,7 +469,11 @@ fn every_lateral_pass_fills_its_lights_layers() {
     let mut r = Renderer::new(&ctx, &scene, options(&scene, 256, 256)).unwrap();
     r.render().unwrap();
     let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
-    assert_eq!(map.depth_or_array_layers(), 4);
+    assert_eq!(
+        map.depth_or_array_layers(),
+        5,
+        "four lights' layers and the bounce's"
+    );
     let layer = |l: u32| {
         let bytes = subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
         subsurface_render::readback::decode_float(map.format(), &bytes).0
@@ -479,4 +484,18 @@ fn every_lateral_pass_fills_its_lights_layers() {
         assert!(taps > 100, "light {l}: only {taps} texels with taps");
         assert_eq!(original, copy, "light {} differs from light {l}", l + 2);
     }
+    // Every texel the first pass drew (a depth, lit or not) holds the bounce and that depth.
+    let (first, bounce) = (layer(0), layer(4));
+    let mut lit = 0;
+    for (t, b) in first.chunks_exact(4).zip(bounce.chunks_exact(4)) {
+        assert_eq!(
+            t[3].abs(),
+            b[3],
+            "a texel's depth differs between the passes"
+        );
+        if b[3] > 0.0 && b[0] > 0.0 {
+            lit += 1;
+        }
+    }
+    assert!(lit > 100, "only {lit} texels received a bounce");
 }

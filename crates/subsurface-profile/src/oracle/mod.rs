@@ -4,7 +4,10 @@
 //! * [`screen`]: the screen-space blurs (six Gaussians, Separable SSS, Hable's 13 taps), with
 //!   a profile per pixel.
 //! * [`texture`]: the texture-space (UV) blur of d'Eon et al. 2007.
+//! * [`bounce`]: the flux pyramid of the shadow maps and the light between parts gathered
+//!   from it.
 
+pub mod bounce;
 pub mod screen;
 pub mod texture;
 

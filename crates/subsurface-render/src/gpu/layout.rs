@@ -62,3 +62,22 @@ pub fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::Bind
         count: None,
     }
 }
+
+/// A write-only storage texture of `format` at `binding` (compute passes' outputs).
+pub fn storage_texture_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    format: wgpu::TextureFormat,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension,
+        },
+        count: None,
+    }
+}

@@ -41,7 +41,10 @@ struct Lights {
     scattering: u32,       // 1: subsurface scattering runs (source_shadow in lighting.wgsl)
     lateral_taps: u32,     // diffusion: shadow-map taps of the lit surface around the chord
     lateral_downsample: u32, // > 1: the taps are read from the lateral map at 1/N resolution
-    _pad2: u32,
+    bounce_layer: u32,     // the lateral map's layer holding the bounce (bounce.wgsl)
+    bounce_ring: u32,      // cells of each pyramid level between a point and the next; 0 = off
+    bounce_cell_mm: f32,   // the finest cells read, profile mm
+    _pad3: vec2<u32>,
     lights: array<Light, MAX_LIGHTS>,
 };
 

@@ -32,7 +32,8 @@ pub const SHADER: &str = concat!(
     include_str!("common.wgsl"),
     include_str!("lighting.wgsl"),
     include_str!("shadow_lookup.wgsl"),
-    include_str!("transmittance.wgsl")
+    include_str!("transmittance.wgsl"),
+    include_str!("bounce.wgsl")
 );
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
@@ -84,7 +85,8 @@ impl LateralTargets {
     pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32, layers: u32) -> Self {
         let device = &ctx.device;
         let downsample = downsample.max(1);
-        let layer_count = layers.clamp(1, MAX_LIGHTS as u32);
+        // One layer per light, and the bounce's after them.
+        let layer_count = layers.clamp(1, MAX_LIGHTS as u32 + 1);
         let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
         let map = util::texture_2d(
             device,
@@ -237,13 +239,16 @@ impl LateralShape {
     /// For `lights` ([`lateral_lights`]; their uniform's `lateral_downsample`): none where no
     /// light needs one.
     pub fn for_lights(lights: &LightsUniform) -> Self {
-        let filled = lateral_lights(lights);
-        match filled.last() {
-            Some(&last) => Self {
-                downsample: lights.lateral_downsample,
-                layers: last + 1,
-            },
-            None => Self::NONE,
+        let layers = match bounce_layer(lights) {
+            Some(layer) => layer + 1,
+            None => lateral_lights(lights).last().map_or(0, |&last| last + 1),
+        };
+        if layers == 0 {
+            return Self::NONE;
+        }
+        Self {
+            downsample: lights.lateral_downsample,
+            layers,
         }
     }
 }
@@ -281,6 +286,12 @@ pub fn lateral_lights(lights: &LightsUniform) -> Vec<u32> {
         .collect()
 }
 
+/// The lateral map's layer that the bounce pass fills for `lights` (`bounce_layer`, after the
+/// lateral lights' layers), if the bounce is gathered on the map.
+pub fn bounce_layer(lights: &LightsUniform) -> Option<u32> {
+    (lights.bounce_ring > 0 && lights.lateral_downsample > 1).then_some(lights.bounce_layer)
+}
+
 /// The lateral pass's light indices, one pair per `LATERAL_STRIDE` bytes (a dynamic offset).
 const LATERAL_STRIDE: u64 = 256;
 
@@ -297,7 +308,8 @@ fn lateral_index_bytes(lights: &[u32]) -> Vec<u8> {
 }
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
-/// `shadow_depth` and `shadow_compare` in lighting.wgsl). Equal layouts are interchangeable,
+/// `shadow_depth` and `shadow_compare` in lighting.wgsl, `flux_position`, `flux_normal` and
+/// `flux_spread` in bounce.wgsl). Equal layouts are interchangeable,
 /// so other pipelines built on the lighting shader (the texture-space irradiance) may bind
 /// [`LightingPass::frame_bind_group`].
 pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -331,6 +343,10 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             atlas(2),
             atlas(3),
             depth,
+            // The flux pyramid (passes::bounce), also 32-bit floats.
+            atlas(6),
+            atlas(7),
+            atlas(8),
             util::sampler_entry(
                 5,
                 wgpu::ShaderStages::FRAGMENT,
@@ -348,17 +364,47 @@ pub struct ShadowMaps<'a> {
     /// The same layers' z-buffer (`Depth32Float` array): percentage-closer filtering through
     /// a comparison sampler.
     pub depth: &'a wgpu::TextureView,
+    /// The flux pyramid's position and normal sums (`bounce::FluxPyramid`), where the
+    /// bounce is gathered.
+    pub flux: Option<[&'a wgpu::TextureView; 3]>,
+}
+
+/// One pass over the lateral map: `pipeline` into its `layers`, timed as `timed`, the first
+/// of a frame clearing the map's z-buffer (the later ones shade only the surfaces it kept),
+/// with the light indices at `offset` of group 3.
+struct MapPass<'a> {
+    timed: &'static str,
+    layers: &'a [u32],
+    first: bool,
+    pipeline: &'a wgpu::RenderPipeline,
+    offset: u32,
 }
 
 /// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
 const METHOD_CONSTANT: &str = "TRANSMITTANCE_METHOD";
 
-/// The lighting pass's `fs_main` for transmittance method `method`.
+/// The WGSL override that fixes where a pipeline's pixels take the bounce from (lighting.wgsl,
+/// `BOUNCE_SOURCE`).
+const BOUNCE_CONSTANT: &str = "BOUNCE_SOURCE";
+
+/// Where the lighting pass takes the bounce from for `lights`: 0 nowhere, 1 the lateral map's
+/// bounce layer, 2 a gather per pixel (no map). A pipeline per source, so that the compiler
+/// drops the gather where the map serves.
+pub fn bounce_source(lights: &LightsUniform) -> u32 {
+    match (lights.bounce_ring, bounce_layer(lights)) {
+        (0, _) => 0,
+        (_, Some(_)) => 1,
+        (_, None) => 2,
+    }
+}
+
+/// The lighting pass's `fs_main` for transmittance method `method` and bounce source `bounce`
+/// ([`bounce_source`]).
 fn lighting_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
-    method: u32,
+    (method, bounce): (u32, u32),
 ) -> wgpu::RenderPipeline {
     util::MeshPipeline {
         label: "lighting",
@@ -371,7 +417,10 @@ fn lighting_pipeline(
         // the normal of back faces.
         cull_mode: None,
         depth: util::DepthTest::Prepassed,
-        constants: &[(METHOD_CONSTANT, f64::from(method))],
+        constants: &[
+            (METHOD_CONSTANT, f64::from(method)),
+            (BOUNCE_CONSTANT, f64::from(bounce)),
+        ],
     }
     .create(device)
 }
@@ -382,7 +431,7 @@ pub struct LightingPass {
     /// `fs_main` built per transmittance method (`TransmittanceMethod::code`), each kept once
     /// built: switching methods back and forth in the viewer compiles each once. See
     /// [`Self::specialize`].
-    pipelines: Vec<(u32, wgpu::RenderPipeline)>,
+    pipelines: Vec<((u32, u32), wgpu::RenderPipeline)>,
     /// The index in `pipelines` of the method the lights uniform asks for.
     current: usize,
     module: wgpu::ShaderModule,
@@ -392,6 +441,10 @@ pub struct LightingPass {
     /// [`LATERAL_STRIDE`] of the buffer). The first pass keeps the nearest surface, the later
     /// ones shade only it.
     lateral: [[wgpu::RenderPipeline; 2]; 2],
+    /// `[first pass, later passes]`: `fs_bounce` into the map's bounce layer.
+    bounce: [wgpu::RenderPipeline; 2],
+    /// The lateral map's layer the bounce is gathered into ([`bounce_layer`]), if any.
+    bounce_layer: Option<u32>,
     lateral_lights: wgpu::BindGroup,
     lateral_indices: wgpu::Buffer,
     /// Group 3 for pipelines that take the screen layout but never read the map.
@@ -448,6 +501,12 @@ impl LightingPass {
             ..Default::default()
         });
         let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
+        let bounce_layer = bounce_layer(lights);
+        let lights_uniform = lights;
+        let no_flux = crate::passes::bounce::dummy_views(device);
+        let flux = shadow
+            .flux
+            .unwrap_or([&no_flux[0], &no_flux[1], &no_flux[2]]);
         let method = lights.transmittance;
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
@@ -488,6 +547,18 @@ impl LightingPass {
                 wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(&shadow_compare),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(flux[0]),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::TextureView(flux[1]),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: wgpu::BindingResource::TextureView(flux[2]),
                 },
             ],
         });
@@ -573,7 +644,10 @@ impl LightingPass {
                 lateral_pipeline("fs_lateral_pair", pair, depth),
             ]
         });
-        let pipeline = lighting_pipeline(device, &layout, &module, method);
+        let bounce = [util::DepthTest::Nearest, util::DepthTest::Prepassed]
+            .map(|depth| lateral_pipeline("fs_bounce", &[LATERAL_FORMAT], depth));
+        let key = (method, bounce_source(lights_uniform));
+        let pipeline = lighting_pipeline(device, &layout, &module, key);
         // Meshes drawn without culling in any order would shade every surface a pixel covers
         // that lands before the nearest one (the back of a head, the far side of a hand): a
         // depth-only pass first leaves the lighting shader one fragment per pixel.
@@ -581,11 +655,13 @@ impl LightingPass {
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         Self {
             prepass,
-            pipelines: vec![(method, pipeline)],
+            pipelines: vec![(key, pipeline)],
             current: 0,
             module,
             layout,
             lateral,
+            bounce,
+            bounce_layer,
             lateral_lights,
             lateral_indices: index_buffer,
             no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
@@ -615,19 +691,22 @@ impl LightingPass {
         ctx.queue
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.prepare_lateral(&ctx.queue, &lateral_lights(lights));
-        self.specialize(&ctx.device, lights.transmittance);
+        self.bounce_layer = bounce_layer(lights);
+        self.specialize(&ctx.device, lights.transmittance, bounce_source(lights));
     }
 
     /// Makes the lighting pipeline the one for transmittance method `method`
-    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`), building it the first
-    /// time it is asked for. Each method has its own pipeline so that the shader
-    /// compiler drops the others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD`).
-    pub fn specialize(&mut self, device: &wgpu::Device, method: u32) {
-        self.current = match self.pipelines.iter().position(|(m, _)| *m == method) {
+    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`) and bounce source
+    /// `bounce` ([`bounce_source`]), building it the first time it is asked for. Each has its
+    /// own pipeline so that the shader compiler drops the others' code (transmittance.wgsl,
+    /// `TRANSMITTANCE_METHOD`; lighting.wgsl, `BOUNCE_SOURCE`).
+    pub fn specialize(&mut self, device: &wgpu::Device, method: u32, bounce: u32) {
+        let key = (method, bounce);
+        self.current = match self.pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let pipeline = lighting_pipeline(device, &self.layout, &self.module, method);
-                self.pipelines.push((method, pipeline));
+                let pipeline = lighting_pipeline(device, &self.layout, &self.module, key);
+                self.pipelines.push((key, pipeline));
                 self.pipelines.len() - 1
             }
         };
@@ -713,7 +792,8 @@ impl LightingPass {
 
     /// The lateral pass (timed "lateral"): `fs_lateral_pair` into two of `lights`' layers at
     /// a time (`fs_lateral` for an odd one), the first pass writing the map's z-buffer and the
-    /// others testing against it.
+    /// others testing against it; then the bounce pass (timed "bounce", `fs_bounce`) into
+    /// the bounce layer.
     fn encode_lateral(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -723,7 +803,6 @@ impl LightingPass {
         lights: &[u32],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        let none = wgpu::Color::TRANSPARENT;
         // Pairs in the order `prepare_lateral` wrote their indices (pair k at offset k); a pair
         // naming a light the map has no layer for is left out.
         let mut first = true;
@@ -731,42 +810,72 @@ impl LightingPass {
             if pair.iter().any(|&l| l >= lateral.layer_count) {
                 continue;
             }
-            let timer = TimedPass::begin(profiler, "lateral", encoder);
-            {
-                let attachments: Vec<_> = pair
-                    .iter()
-                    .map(|&l| {
-                        util::color_attachment(
-                            &lateral.layers[l as usize],
-                            wgpu::LoadOp::Clear(none),
-                        )
-                    })
-                    .collect();
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("lateral"),
-                    color_attachments: &attachments,
-                    // Kept: the next pair's pass shades the surfaces this one found nearest.
-                    depth_stencil_attachment: util::depth_attachment(
-                        &lateral.zbuffer,
-                        if first {
-                            wgpu::LoadOp::Clear(1.0)
-                        } else {
-                            wgpu::LoadOp::Load
-                        },
-                        wgpu::StoreOp::Store,
-                    ),
-                    timestamp_writes: timer.writes(),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                let offset = (k as u64 * LATERAL_STRIDE) as u32;
-                pass.set_bind_group(3, &self.lateral_lights, &[offset]);
-                let pipeline = &self.lateral[usize::from(!first)][pair.len() - 1];
-                first = false;
-                self.draw_objects(&mut pass, pipeline, objects, maps);
-            }
-            timer.end(profiler, encoder);
+            let pass = MapPass {
+                timed: "lateral",
+                layers: pair,
+                first,
+                pipeline: &self.lateral[usize::from(!first)][pair.len() - 1],
+                offset: (k as u64 * LATERAL_STRIDE) as u32,
+            };
+            self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
+            first = false;
         }
+        if let Some(layer) = self.bounce_layer.filter(|&l| l < lateral.layer_count) {
+            // fs_bounce reads no light index, but the layout has the group.
+            let pass = MapPass {
+                timed: "bounce",
+                layers: &[layer],
+                first,
+                pipeline: &self.bounce[usize::from(!first)],
+                offset: 0,
+            };
+            self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
+        }
+    }
+
+    /// One pass of [`MapPass`] over the lateral map.
+    fn encode_map_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        lateral: &LateralTargets,
+        map_pass: &MapPass<'_>,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, map_pass.timed, encoder);
+        {
+            let attachments: Vec<_> = map_pass
+                .layers
+                .iter()
+                .map(|&l| {
+                    util::color_attachment(
+                        &lateral.layers[l as usize],
+                        wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    )
+                })
+                .collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(map_pass.timed),
+                color_attachments: &attachments,
+                // Kept: the next pass shades the surfaces this one found nearest.
+                depth_stencil_attachment: util::depth_attachment(
+                    &lateral.zbuffer,
+                    if map_pass.first {
+                        wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    },
+                    wgpu::StoreOp::Store,
+                ),
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(3, &self.lateral_lights, &[map_pass.offset]);
+            self.draw_objects(&mut pass, map_pass.pipeline, objects, maps);
+        }
+        timer.end(profiler, encoder);
     }
 
     /// As `encode`, with each object's texture-space bind group (`maps[i]` for `objects[i]`;
@@ -784,7 +893,7 @@ impl LightingPass {
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
         if let Some(lateral) = &targets.lateral
-            && !lateral_lights.is_empty()
+            && (!lateral_lights.is_empty() || self.bounce_layer.is_some())
         {
             self.encode_lateral(encoder, lateral, objects, maps, lateral_lights, profiler);
         }

@@ -1,5 +1,6 @@
 //! One module per pass, each with its WGSL beside it.
 
+pub mod bounce;
 pub mod copy;
 pub mod fullscreen;
 pub mod lighting;
@@ -17,6 +18,7 @@ pub mod util;
 /// validates each of them without a GPU.
 pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("shadow.wgsl", shadow::SHADER),
+    ("bounce_build.wgsl", bounce::SHADER),
     ("lighting.wgsl", lighting::SHADER),
     ("tonemap.wgsl", tonemap::SHADER),
     ("sss.wgsl + sss_direct.wgsl", sss::SHADER),

@@ -92,6 +92,7 @@ impl ShadowPass {
                 .depth_view
                 .as_ref()
                 .expect("the shadow pass keeps its z-buffer"),
+            flux: None,
         }
     }
 

@@ -388,6 +388,14 @@ struct ScreenSample {
     gradient: vec2<f32>,
 };
 
+// The pixel's surface extended as a plane (its depth derivatives), at the centre of the map
+// texel `texel` of a map `scale` times the frame's size: the depth a texel on the pixel's own
+// surface holds.
+fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 {
+    let centre = (vec2<f32>(texel) + 0.5) / scale;
+    return screen.depth + dot(screen.gradient, centre - screen.xy);
+}
+
 // `diffusion`'s lateral light at `screen`'s pixel for light `layer`, interpolated from the
 // lateral map that the lateral pass filled at 1/N resolution (fs_lateral in lighting.wgsl).
 // The four map texels around the pixel count with their bilinear weights where their surface
@@ -420,8 +428,7 @@ fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32>
                 continue;
             }
             let t = textureLoad(lateral_map, texel, layer, 0);
-            let centre = (vec2<f32>(texel) + 0.5) / scale;
-            let expected = screen.depth + dot(screen.gradient, centre - screen.xy);
+            let expected = plane_depth(screen, texel, scale);
             let w = select(1.0 - f.x, f.x, i == 1) * select(1.0 - f.y, f.y, j == 1);
             if (t.w == 0.0 || abs(abs(t.w) - expected) > tolerance) {
                 continue;

@@ -4,7 +4,9 @@
 
 use wgpu::util::DeviceExt;
 
-pub use crate::gpu::layout::{float_texture_entry, sampler_entry, storage_entry, uniform_entry};
+pub use crate::gpu::layout::{
+    float_texture_entry, sampler_entry, storage_entry, storage_texture_entry, uniform_entry,
+};
 use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
 use crate::timing::TimedPass;
 

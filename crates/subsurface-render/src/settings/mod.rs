@@ -2,9 +2,11 @@
 //! table is a [`RenderSettings`]; the command line overlays its flags on it and the viewer's
 //! two sides are clones of it, so every setting has one name, one unit and one default.
 
+mod bounce;
 mod sss;
 mod transmittance;
 
+pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{
     DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, TransmittanceMethod, TransmittanceSettings,
@@ -104,6 +106,8 @@ pub struct RenderSettings {
     pub sss: SssSettings,
     /// Light through thin parts (`[render.transmittance]`).
     pub transmittance: TransmittanceSettings,
+    /// Light between lit parts across the air (`[render.bounce]`).
+    pub bounce: BounceSettings,
 }
 
 impl Default for RenderSettings {
@@ -116,6 +120,7 @@ impl Default for RenderSettings {
             background: [0.02, 0.02, 0.025],
             sss: SssSettings::default(),
             transmittance: TransmittanceSettings::default(),
+            bounce: BounceSettings::default(),
         }
     }
 }
@@ -145,6 +150,7 @@ impl RenderSettings {
         self.sss.validate().map_err(|e| e.under("sss"))?;
         self.transmittance
             .validate()
-            .map_err(|e| e.under("transmittance"))
+            .map_err(|e| e.under("transmittance"))?;
+        self.bounce.validate().map_err(|e| e.under("bounce"))
     }
 }

@@ -96,7 +96,13 @@ pub fn transmittance(ui: &mut Ui, m: &mut Model) {
             .changed();
         changed |= thickness_filter_slider(ui, &mut t.thickness_filter);
         changed |= lateral_taps_slider(ui, &mut t.lateral_taps);
-        changed | lateral_texel_slider(ui, &mut t.lateral_texel_mm)
+        changed |= lateral_texel_slider(ui, &mut t.lateral_texel_mm);
+        // Scene-wide (`[render.bounce]`): both sides of a split screen share it.
+        let ring = &mut m.state.desc.render.bounce.ring;
+        let max = subsurface_render::settings::MAX_BOUNCE_RING;
+        changed
+            | ui.add(Slider::new(ring, 0..=max).text("bounce ring (light between parts, 0 = off)"))
+                .changed()
     });
 }
 

@@ -13,15 +13,8 @@ pub const LINE_SPAN: u32 = 256;
 /// two outputs (packed for the vertical pass, colour for the result).
 pub fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let compute = wgpu::ShaderStages::COMPUTE;
-    let storage = |binding, format| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: compute,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2,
-        },
-        count: None,
+    let storage = |binding, format| {
+        util::storage_texture_entry(binding, compute, format, wgpu::TextureViewDimension::D2)
     };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("sss workgroup"),

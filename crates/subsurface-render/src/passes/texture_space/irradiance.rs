@@ -4,7 +4,7 @@
 //! profile millimetres per texel along u and v, from the derivatives of the world position).
 //!
 //! The shader is the lighting pass's (common.wgsl, lighting.wgsl, shadow_lookup.wgsl,
-//! transmittance.wgsl) with irradiance.wgsl appended, and the pipeline takes the lighting
+//! transmittance.wgsl, bounce.wgsl) with irradiance.wgsl appended, and the pipeline takes the lighting
 //! pass's bind groups: its frame bind group (group 0), the object's (group 1), the object's
 //! maps (group 2) and, in group 3, no lateral map (texels of a UV map are no pixels of it:
 //! the lateral taps run per texel).
@@ -20,6 +20,7 @@ pub const SHADER: &str = concat!(
     include_str!("../lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
     include_str!("../transmittance.wgsl"),
+    include_str!("../bounce.wgsl"),
     include_str!("irradiance.wgsl")
 );
 
