@@ -425,6 +425,45 @@ fn update_builds_the_pipeline_of_a_new_transmittance_method() {
     );
 }
 
+/// The viewer's bounce slider: `update` from no bounce to the bounce builds the flux pyramid
+/// and binds it (a new lighting pass and a map layer more), giving a fresh renderer's image;
+/// a light moved with the bounce on rewrites the pyramid's light cameras; back to no bounce
+/// gives the first image again. At 96x64 the skin is too small on screen for a lateral map,
+/// so the pixels gather the bounce themselves; at 256x256 it is read from the map.
+#[test]
+fn update_turns_the_bounce_on_and_off() {
+    let Some(ctx) = context() else { return };
+    let scene = subsurface_render::Scene::default_scene();
+    for (w, h) in [(96, 64), (256, 256)] {
+        let mut off = options(&scene, w, h);
+        off.settings.bounce.ring = 0;
+        let mut r = Renderer::new(&ctx, &scene, off.clone()).unwrap();
+        let first = r.render().unwrap().image;
+        let mut on = off.clone();
+        on.settings.bounce.ring = 2;
+        let (updated, fresh) = update_and_fresh(&ctx, &mut r, &scene, &on);
+        assert_ne!(
+            first.as_raw(),
+            fresh.as_raw(),
+            "{w}x{h}: the bounce changed nothing"
+        );
+        assert_eq!(
+            updated.as_raw(),
+            fresh.as_raw(),
+            "{w}x{h}: update() to the bounce"
+        );
+        let mut moved = scene.clone();
+        moved.desc.lights[0].position[0] += 0.05;
+        let (updated, fresh) = update_and_fresh(&ctx, &mut r, &moved, &on);
+        assert!(updated == fresh, "{w}x{h}: a light moved");
+        r.update(&scene, &off).unwrap();
+        assert!(
+            r.render().unwrap().image == first,
+            "{w}x{h}: update() back to no bounce"
+        );
+    }
+}
+
 /// Moving the camera nearer makes the skin larger on screen, so the lateral map's reduction
 /// (texels of about 4 profile mm) grows: `update` must give the new map the frame a fresh
 /// renderer gives, without new frame-sized targets.
