@@ -259,7 +259,7 @@ const DEFAULT: (&str, &str) = ("separable", "diffusion");
 
 /// Issue 13's target: every region mean within this of the path tracer. (The hand's fingers
 /// were the last to reach it, at -21 % without the bounce: light one part of the hand sends
-/// another across the air, finding 10 and `the_bounce_is_the_light_between_parts`.)
+/// another across the air, finding 11 and `the_bounce_is_the_light_between_parts`.)
 const REGION_TARGET: f64 = 0.20;
 
 #[test]
@@ -390,7 +390,7 @@ fn regression_guard_against_committed_references() {
 /// share of the full reference's light within 2 points of its record on every region, and on
 /// the hand's fingers, where the references differ most (the full one holds about 1.3x the
 /// light), a real part of that difference and not more than all of it (docs/fidelity.md,
-/// findings 9 and 10).
+/// findings 9 and 11).
 #[test]
 fn the_bounce_is_the_light_between_parts() {
     let recorded: serde_json::Value = serde_json::from_str(

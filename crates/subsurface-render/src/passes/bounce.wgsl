@@ -4,7 +4,7 @@
 // into cells so that a few hundred reads cover the whole map). Every cell sends on what the
 // light delivered to it: diffusely (the medium's albedo, through the flux-weighted normal sum)
 // and by its rough boundary's reflection. The cells are not tested for visibility: a shadow
-// map cannot tell whether two lit points see each other (docs/fidelity.md, finding 10).
+// map cannot tell whether two lit points see each other (docs/fidelity.md, finding 11).
 
 // Per cell: rgb = sum of flux x position, a = the flux (per unit of the light's colour: spot
 // falloff x the texel's solid angle, or its area across a directional beam).
@@ -15,10 +15,8 @@
 // r = sum of flux x squared distance from the light's origin (`position` of its uniform).
 @group(0) @binding(8) var flux_spread: texture_2d_array<f32>;
 
-
-// The irradiance (per unit of nothing: multiply by the receiving albedo) that the lit
-// surfaces send the point `p` of vertex normal `n`, from every light with a spot or directional
-// shadow map. Each level of the pyramid is read from `ring` to `2 ring` of its cells away
+// The irradiance (the receiver's albedo not yet applied) that the lit surfaces send the point
+// `p` of vertex normal `n`, from every light with a spot or directional shadow map. Each level of the pyramid is read from `ring` to `2 ring` of its cells away
 // from the point's place in the map (the finest level every cell nearer, the coarsest every
 // cell farther), so each read stands for a solid angle of about the same size.
 fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
