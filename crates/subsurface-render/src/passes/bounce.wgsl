@@ -16,9 +16,10 @@
 @group(0) @binding(8) var flux_spread: texture_2d_array<f32>;
 
 // The irradiance (the receiver's albedo not yet applied) that the lit surfaces send the point
-// `p` of vertex normal `n`, from every light with a spot or directional shadow map. Each level of the pyramid is read from `ring` to `2 ring` of its cells away
-// from the point's place in the map (the finest level every cell nearer, the coarsest every
-// cell farther), so each read stands for a solid angle of about the same size.
+// `p` of vertex normal `n`, from every light with a spot or directional shadow map. Each level
+// of the pyramid is read from `ring` to `2 ring` of its cells away from the point's place in
+// the map (the finest level every cell nearer, the coarsest every cell farther), so each read
+// stands for a solid angle of about the same size.
 fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let ring = f32(lights.bounce_ring);
