@@ -62,7 +62,8 @@ pub struct LightingTargets {
     screen: wgpu::BindGroup,
 }
 
-/// The lateral pass's targets: one layer per light index up to the last that the pass fills,
+/// The lateral pass's targets: one layer per light index up to the last that the pass fills
+/// (and the bounce's after them, `bounce_layer`),
 /// of `LATERAL_FORMAT` at `ceil(size / downsample)`: rgb = the lateral taps' sum at the
 /// texel's surface, a = its view depth; a < 0: the light reaches that surface directly (-a its
 /// depth); a = 0: nothing there. And the z-buffer of that resolution.
@@ -502,12 +503,11 @@ impl LightingPass {
         });
         let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
         let bounce_layer = bounce_layer(lights);
-        let lights_uniform = lights;
+        let key = (lights.transmittance, bounce_source(lights));
         let no_flux = crate::passes::bounce::dummy_views(device);
         let flux = shadow
             .flux
             .unwrap_or([&no_flux[0], &no_flux[1], &no_flux[2]]);
-        let method = lights.transmittance;
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
         let camera = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -646,7 +646,6 @@ impl LightingPass {
         });
         let bounce = [util::DepthTest::Nearest, util::DepthTest::Prepassed]
             .map(|depth| lateral_pipeline("fs_bounce", &[LATERAL_FORMAT], depth));
-        let key = (method, bounce_source(lights_uniform));
         let pipeline = lighting_pipeline(device, &layout, &module, key);
         // Meshes drawn without culling in any order would shade every surface a pixel covers
         // that lands before the nearest one (the back of a head, the far side of a hand): a
