@@ -538,3 +538,48 @@ fn every_lateral_pass_fills_its_lights_layers() {
     }
     assert!(lit > 100, "only {lit} texels received a bounce");
 }
+
+/// Contexts made, used and dropped on several threads at once, as `cargo test` does. NVIDIA's
+/// Linux driver crashed the whole test process (SIGSEGV) here before `GpuContext` serialised
+/// instance and device creation and teardown; lavapipe passes either way, so this guards the
+/// GPU machines rather than CI.
+#[test]
+fn contexts_made_and_dropped_on_many_threads_all_render() {
+    if context().is_none() {
+        return;
+    }
+    let s = dark_scene(
+        &camera_toml(3.0, 30.0, ""),
+        &light_toml("directional", [5.0, 0.0, 0.0], 2.0, "shadow_map_size = 64"),
+        r#"
+        [[objects]]
+        mesh = { shape = "sphere", radius = 0.5 }
+        "#,
+    );
+    let lit: Vec<usize> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..4)
+            .map(|_| {
+                scope.spawn(|| {
+                    (0..3)
+                        .map(|_| {
+                            let ctx = context().unwrap();
+                            let mut r = Renderer::new(&ctx, &s, options(&s, 16, 16)).unwrap();
+                            r.render().unwrap();
+                            let diffuse = r.read_diffuse().unwrap();
+                            diffuse.iter().filter(|c| luminance(**c) > 0.05).count()
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap())
+            .collect()
+    });
+    assert_eq!(lit.len(), 12);
+    assert!(
+        lit.iter().all(|&n| n > 10 && n == lit[0]),
+        "lit pixels per render: {lit:?}"
+    );
+}

@@ -3,28 +3,73 @@
 
 pub mod layout;
 
-use std::sync::{Arc, Mutex};
+use std::cell::RefCell;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use crate::error::{RenderError, one_line};
+
+/// Held while this process creates or destroys a Vulkan instance or device. NVIDIA's Linux
+/// driver is not thread-safe there (wgpu issues 5930 and 10010, blade issue 336): two test
+/// threads that each made and dropped a context killed the test process with SIGSEGV on an
+/// H200 (driver 580), while lavapipe never showed it. Contexts are made once per renderer,
+/// so serialising their creation and teardown costs nothing measurable.
+static DRIVER: Mutex<()> = Mutex::new(());
+
+fn driver_lock() -> MutexGuard<'static, ()> {
+    // The guarded data is `()`: a thread that panicked while holding it left nothing broken.
+    DRIVER.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+thread_local! {
+    /// The driver lock between [`TeardownBegin`] and [`TeardownEnd`]: fields drop in
+    /// declaration order, so the wgpu handles declared between them drop while it is held.
+    static TEARDOWN: RefCell<Option<MutexGuard<'static, ()>>> = const { RefCell::new(None) };
+}
+
+/// First field of [`GpuContext`]: takes the driver lock before its wgpu handles drop.
+#[derive(Clone)]
+struct TeardownBegin;
+
+impl Drop for TeardownBegin {
+    fn drop(&mut self) {
+        let guard = driver_lock();
+        TEARDOWN.with(|t| *t.borrow_mut() = Some(guard));
+    }
+}
+
+/// Last field of [`GpuContext`]: releases the lock once its wgpu handles are gone.
+#[derive(Clone)]
+struct TeardownEnd;
+
+impl Drop for TeardownEnd {
+    fn drop(&mut self) {
+        TEARDOWN.with(|t| t.borrow_mut().take());
+    }
+}
 
 /// A wgpu device and queue that need no window. Share it between passes; clone is cheap.
 #[derive(Clone)]
 pub struct GpuContext {
+    // Must stay the first field (see `TEARDOWN`).
+    _teardown_begin: TeardownBegin,
     pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     errors: Arc<Mutex<Vec<String>>>,
+    // Must stay the last field.
+    _teardown_end: TeardownEnd,
 }
 
 impl GpuContext {
     /// Creates a headless context. `WGPU_BACKEND` limits the backends, `WGPU_ADAPTER_NAME`
     /// picks an adapter by (case-insensitive) substring, `WGPU_POWER_PREF` is honoured too.
     pub fn new_headless() -> Result<Self, RenderError> {
+        let _driver = driver_lock();
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(select_adapter(&instance))?;
-        Self::from_adapter(instance, adapter)
+        Self::with_device(instance, adapter)
     }
 
     /// Creates the device on a chosen adapter (used by the viewer, which needs a surface).
@@ -32,6 +77,11 @@ impl GpuContext {
         instance: wgpu::Instance,
         adapter: wgpu::Adapter,
     ) -> Result<Self, RenderError> {
+        let _driver = driver_lock();
+        Self::with_device(instance, adapter)
+    }
+
+    fn with_device(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Self, RenderError> {
         let info = adapter.get_info();
         // Timestamp queries give the per-pass GPU times that `render` and `bench` report; an
         // adapter without them still renders, it just reports no GPU times.
@@ -59,11 +109,13 @@ impl GpuContext {
             }
         }));
         Ok(Self {
+            _teardown_begin: TeardownBegin,
             instance,
             adapter,
             device,
             queue,
             errors,
+            _teardown_end: TeardownEnd,
         })
     }
 
