@@ -86,7 +86,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "packed",
+        default_value = "workgroup",
         value_name = "FETCH,.."
     )]
     pub fetch: Vec<SssFetch>,

@@ -41,7 +41,7 @@ pub struct SettingsArgs {
     /// Rgba32Uint texel per texel), workgroup (packed, with separable's passes as compute
     /// shaders that read each line once into workgroup memory) or direct (colour, depth and
     /// SSS textures per texel); the same image at a different cost [default: render.sss.fetch,
-    /// packed].
+    /// workgroup].
     #[arg(long, value_name = "FETCH")]
     pub sss_fetch: Option<SssFetch>,
     /// Let the blur cross depth edges (render.sss.follow_surface = false).

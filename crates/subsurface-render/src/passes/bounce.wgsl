@@ -141,6 +141,25 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
     let pos = screen.xy * scale - 0.5;
     let base = vec2<i32>(floor(pos)) - vec2<i32>(1);
     let tolerance = LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 0.1) * object.world_per_mm;
+    // Inside a surface the four texels around the pixel all lie on it: their bilinear blend
+    // serves, and the other twelve loads are left to the pixels that need them (on an H200 the
+    // sixteen were a fifth of the lighting pass at 1920x1080; docs/performance.md).
+    let f = pos - floor(pos);
+    var inner = vec3<f32>(0.0);
+    var inside = true;
+    for (var j = 1; j < 3; j++) {
+        for (var i = 1; i < 3; i++) {
+            let texel = base + vec2<i32>(i, j);
+            let t = textureLoad(lateral_map, clamp(texel, vec2<i32>(0), size - 1), layer, 0);
+            let w = select(1.0 - f.x, f.x, i == 2) * select(1.0 - f.y, f.y, j == 2);
+            inside = inside && all(texel >= vec2<i32>(0)) && all(texel < size) && t.w > 0.0
+                && abs(t.w - plane_depth(screen, texel, scale)) <= tolerance;
+            inner += t.rgb * w;
+        }
+    }
+    if (inside) {
+        return inner;
+    }
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     var nearest = vec4<f32>(0.0, 0.0, 0.0, 16.0 * tolerance);
