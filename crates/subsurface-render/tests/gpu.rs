@@ -10,17 +10,23 @@ fn luminance(c: [f32; 4]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-#[test]
-fn lit_sphere_is_brighter_on_the_lit_side() {
-    let Some(ctx) = context() else { return };
-    let s = dark_scene(
+/// A sphere of radius 0.5 lit from +x by a directional light of irradiance 2 (`light_more`:
+/// its extra `key = value` lines), seen from 3 units down +z.
+fn lit_sphere(light_more: &str) -> subsurface_render::Scene {
+    dark_scene(
         &camera_toml(3.0, 30.0, ""),
-        &light_toml("directional", [5.0, 0.0, 0.0], 2.0, ""),
+        &light_toml("directional", [5.0, 0.0, 0.0], 2.0, light_more),
         r#"
         [[objects]]
         mesh = { shape = "sphere", radius = 0.5 }
         "#,
-    );
+    )
+}
+
+#[test]
+fn lit_sphere_is_brighter_on_the_lit_side() {
+    let Some(ctx) = context() else { return };
+    let s = lit_sphere("");
     let (w, h) = (96, 96);
     let mut r = Renderer::new(&ctx, &s, options(&s, w, h)).unwrap();
     r.render().unwrap();
@@ -548,14 +554,7 @@ fn contexts_made_and_dropped_on_many_threads_all_render() {
     if context().is_none() {
         return;
     }
-    let s = dark_scene(
-        &camera_toml(3.0, 30.0, ""),
-        &light_toml("directional", [5.0, 0.0, 0.0], 2.0, "shadow_map_size = 64"),
-        r#"
-        [[objects]]
-        mesh = { shape = "sphere", radius = 0.5 }
-        "#,
-    );
+    let s = lit_sphere("shadow_map_size = 64");
     let lit: Vec<usize> = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..4)
             .map(|_| {
