@@ -128,13 +128,14 @@ fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 }
 
 // The bounce at the lighting pass's pixel, interpolated from the lateral map's bounce layer
-// (fs_bounce): the 4 x 4 texels around the pixel, weighted by a tent two texels wide, where
-// their surface lies within a quarter of the medium's decay length (at most 2.5 mm) of the
-// pixel's own, extended as a plane (lateral_from_map's test), or within four times that of the
-// pixel's depth; else the one nearest in depth (below). Wider than the bilinear 2 x 2 of the lateral light
-// (the bounce changes over centimetres), so that a pixel beside a depth edge (the neck under
-// the jaw, a finger's outline), whose nearest texels show the nearer surface, still finds
-// its own: with 2 x 2 the jaw's outline drew a dark seam.
+// (fs_bounce): the bilinear 2 x 2 where all four texels lie on the pixel's surface (within
+// the tolerance of its plane, lateral_from_map's test). Elsewhere the 4 x 4 texels around the
+// pixel, weighted by a tent two texels wide, where their surface lies within a quarter of the
+// medium's decay length (at most 2.5 mm) of the pixel's own, extended as a plane, or within
+// four times that of the pixel's depth; else the one nearest in depth (below). Wider than the
+// bilinear 2 x 2 (the bounce changes over centimetres), so that a pixel beside a depth edge
+// (the neck under the jaw, a finger's outline), whose nearest texels show the nearer
+// surface, still finds its own: with 2 x 2 alone the jaw's outline drew a dark seam.
 fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
     let size = vec2<i32>(textureDimensions(lateral_map));
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);

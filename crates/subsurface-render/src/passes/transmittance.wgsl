@@ -362,7 +362,8 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
 // decay length (0.9 mm for skin1), so the four texels around a pixel on one smooth surface
 // agree, and a sheet in front of another (tests/transmittance.rs: without the test the front
 // one's pixels beside the edge took the back one's light), a finger in front of a palm, or a
-// curved rim where the plane leaves the surface within a texel gathers its own taps.
+// curved rim where the plane leaves the surface within a texel takes the texel nearest its
+// depth instead (lateral_from_map).
 const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
 // The map serves only where its texels are at most this many of the kernel's decay lengths
 // (1 / lateral_decay) apart on the surface. The renderer sizes the map for texels of
@@ -373,8 +374,8 @@ const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
 // lengths apart (6.8 mm) still read within the taps' own quadrature error of the converged
 // sum (tests/transmittance.rs).
 const LATERAL_MAX_TEXEL: f32 = 4.0;
-// Below this share of the bilinear weight on the pixel's own surface, the pixel runs the taps
-// itself rather than extrapolate from a texel a map texel or more away.
+// Below this share of the bilinear weight on the pixel's own surface, the pixel takes the
+// texel of the 4 x 4 around it nearest its depth rather than blend texels of other surfaces.
 const LATERAL_MIN_WEIGHT: f32 = 0.3;
 // How far in depth, in depth tolerances, the nearest texel of a silhouette pixel may lie.
 const LATERAL_NEAREST_TOLERANCES: f32 = 16.0;
@@ -405,8 +406,10 @@ fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 
 // slanted surface keeps its texels and a depth edge loses them). Texels the light reaches
 // directly hold no taps: on a surface facing the light (`facing`), where only acne or a
 // penumbra leaves the pixel partly unlit, they count as no lateral light; behind it (a rim
-// past the terminator) they are left out. w < 0 where the texels carry too little of the
-// weight (a silhouette, a depth edge), and the caller gathers the taps itself.
+// past the terminator) they are left out. Where the four carry too little of the weight (a
+// silhouette, a depth edge) the nearest texel in depth serves (below). w < 0 where the map
+// cannot serve (its texels too far apart on this object, or no texel of the pixel's surface
+// within the 4 x 4), and the caller gathers the taps itself.
 fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32> {
     let units_per_mm = object.world_per_mm * object.translucency;
     let texel_mm = f32(lights.lateral_downsample) * screen.depth / (camera.focal_px * units_per_mm);
