@@ -351,10 +351,10 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
 
 /// The lateral map's reduction for `scene` at `width` x `height` with `settings`
 /// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
-/// the translucent object in view nearest in those terms, at the depth of its bounds' centre
-/// (at least the near plane), so that the map's texels are the same millimetres at any
-/// resolution and zoom (a pixel of a farther object whose texels come out coarser than the
-/// shader allows gathers its own taps). Objects wholly outside the view do not count. 1 (no
+/// the translucent objects in view nearest and farthest in those terms, at the depth of their
+/// bounds' centres (at least the near plane), so that the map's texels are the same
+/// millimetres at any resolution and zoom, and fine enough for the farthest skin too (every
+/// pixel reads the map where there is one). Objects wholly outside the view do not count. 1 (no
 /// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
 /// transmitted light from its UV-space pass).
 pub fn lateral_downsample(
@@ -375,7 +375,7 @@ pub fn lateral_downsample(
     let camera = camera_uniform(scene, width, height);
     let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
-    let pixel_mm = scene
+    let (near_mm, far_mm) = scene
         .objects
         .iter()
         .filter(|o| o.material.translucency > 0.0 && in_view(view_proj, o.world_bounds()))
@@ -385,8 +385,10 @@ pub fn lateral_downsample(
             depth / camera.focal_px / (world_per_mm(o) * o.material.translucency)
         })
         .filter(|mm| mm.is_finite() && *mm > 0.0)
-        .fold(f32::INFINITY, f32::min);
-    crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
+        .fold((f32::INFINITY, 0.0f32), |(near, far), mm| {
+            (near.min(mm), far.max(mm))
+        });
+    crate::settings::lateral_downsample(t.lateral_texel_mm, near_mm, far_mm)
 }
 
 /// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no

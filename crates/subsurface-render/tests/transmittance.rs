@@ -7,7 +7,7 @@ use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
 use subsurface_profile::specular::{rough_transmittance, schlick};
 use subsurface_render::SssMethod;
-use subsurface_render::TransmittanceMethod;
+use subsurface_render::{DEFAULT_LATERAL_TEXEL_MM, TransmittanceMethod};
 use subsurface_render::{DebugView, Renderer, Scene};
 
 const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
@@ -680,21 +680,34 @@ fn stepped_block(lateral_taps: u32) -> Vec<[f32; 4]> {
 /// it up to 12 mm from the step (a depth edge between two skin surfaces, on the camera's
 /// side: the light, behind the block, reaches the sheet only through it).
 fn stepped_block_with(lateral_taps: u32, texel_mm: f32, occluder: bool) -> Vec<[f32; 4]> {
-    let object = |x: f32, width: f32, thickness: f32, front: f32| {
-        format!(
-            "[[objects]]\nmesh = {{ shape = \"slab\", width = {width:?}, height = 0.05, thickness = {thickness:?} }}\ntranslation = [{x:?}, 0.0, {:?}]\nmm_per_unit = 1000.0\n[objects.material]\nalbedo = [1.0, 1.0, 1.0]\nspecular = 0.0\nmedium = \"skin\"\n",
-            front - thickness / 2.0
-        )
-    };
-    let slab = |x: f32, thickness: f32| object(x, 0.05, thickness, 0.0);
     let sheet = if occluder {
-        object(-0.031, 0.038, 0.002, 0.03)
+        skin_slab(-0.031, 0.0, 0.038, 0.038, 0.002, 0.03)
     } else {
         String::new()
     };
+    stepped_block_seen(lateral_taps, texel_mm, 0.3, &sheet)
+}
+
+/// A `[[objects]]` slab of skin centred on (`x`, `y`), `width` x `height`, its front face at z
+/// = `front`, `thickness` deep (metres, 1000 mm a unit).
+fn skin_slab(x: f32, y: f32, width: f32, height: f32, thickness: f32, front: f32) -> String {
+    format!(
+        "[[objects]]\nmesh = {{ shape = \"slab\", width = {width:?}, height = {height:?}, thickness = {thickness:?} }}\ntranslation = [{x:?}, {y:?}, {:?}]\nmm_per_unit = 1000.0\n[objects.material]\nalbedo = [1.0, 1.0, 1.0]\nspecular = 0.0\nmedium = \"skin\"\n",
+        front - thickness / 2.0
+    )
+}
+
+/// The stepped block seen from `camera_z` metres in front of it, with `more` objects.
+fn stepped_block_seen(
+    lateral_taps: u32,
+    texel_mm: f32,
+    camera_z: f32,
+    more: &str,
+) -> Vec<[f32; 4]> {
+    let slab = |x: f32, thickness: f32| skin_slab(x, 0.0, 0.05, 0.05, thickness, 0.0);
     let toml = format!(
-        "{}\n[render]\nambient = [0.0, 0.0, 0.0]\ntransmittance = {{ normal_shrink = 0.0001 }}\n{}\n{}\n{}\n{sheet}",
-        camera_toml(0.3, 20.0, "near = 0.05\nfar = 2.0"),
+        "{}\n[render]\nambient = [0.0, 0.0, 0.0]\ntransmittance = {{ normal_shrink = 0.0001 }}\n{}\n{}\n{}\n{more}",
+        camera_toml(camera_z, 20.0, "near = 0.05\nfar = 2.0"),
         common::light_toml(
             "directional",
             [0.0, 0.0, -1.0],
@@ -837,7 +850,7 @@ fn lateral_map_keeps_the_taps_accuracy_across_a_step() {
 /// A depth edge between two skin surfaces: a sheet 30 mm in front of the stepped block's thick
 /// part, whose lateral light is nothing (its entry, the block's back, is 46 mm away), beside
 /// the block's, which is at its strongest there. The map's texels straddling the edge hold
-/// both; a pixel must take only texels of its own surface (or gather its own taps). Without
+/// both; a pixel must take only texels of its own surface. Without
 /// the depth test the sheet's two pixels beside the edge read 0.005 and 0.015 of the block's
 /// light and the block's first two 13 % less.
 #[test]
@@ -866,4 +879,41 @@ fn lateral_map_does_not_cross_depth_edges() {
             "pixel {i} of the block beside the sheet: {got} against {want}"
         );
     }
+}
+
+/// The stepped block 600 mm away (3.3 mm a pixel) beside a small sheet of skin 100 mm from
+/// the camera (0.55 mm a pixel), as a character far behind a near one. The map is sized for the
+/// near sheet's 4 mm texels, and every pixel of a frame with a map reads it, so the far block
+/// must get texels fine enough for its step (`MAX_FAR_TEXEL_FACTOR`): sized for the near
+/// sheet alone (a 7x reduction, 23 mm texels on the block) its row's mean error against the
+/// converged taps was 0.032, against the twelve taps' own 0.007; with the bound (a 2x
+/// reduction, 6.6 mm texels) 0.011.
+#[test]
+fn far_skin_reads_a_map_fine_enough_for_it() {
+    if context().is_none() {
+        return;
+    }
+    let near = skin_slab(0.012, 0.012, 0.01, 0.01, 0.002, 0.5);
+    let taps = subsurface_profile::lateral::DEFAULT_LATERAL_TAPS;
+    let truth = stepped_block_seen(
+        subsurface_profile::lateral::MAX_LATERAL_TAPS,
+        0.0,
+        0.6,
+        &near,
+    );
+    let per_pixel = stepped_block_seen(taps, 0.0, 0.6, &near);
+    let mapped = stepped_block_seen(taps, DEFAULT_LATERAL_TEXEL_MM, 0.6, &near);
+    assert_ne!(mapped, per_pixel, "the lateral map was not read");
+    let row = row_red(&truth);
+    let mean_error = |img: &[[f32; 4]]| {
+        row.iter()
+            .map(|&(i, want)| (img[32 * 64 + i][0] / want - 1.0).abs())
+            .sum::<f32>()
+            / row.len() as f32
+    };
+    let (pp, map) = (mean_error(&per_pixel), mean_error(&mapped));
+    assert!(
+        map <= pp + 0.01,
+        "far block: the map's mean error {map} against the per-pixel taps' {pp}"
+    );
 }

@@ -9,7 +9,8 @@
 //! With `diffusion` and lateral taps, a lateral pass runs first: the meshes' front faces again
 //! at a reduced resolution ([`LateralTargets`], the reduction from `gpu_scene::lateral_downsample`), the
 //! lateral taps of two lights per pass into a map the lighting pass then interpolates
-//! (transmittance.wgsl, `lateral_from_map`).
+//! (transmittance.wgsl, `lateral_from_map`); a lighting pipeline built for the map holds no
+//! taps of its own ([`lateral_source`]).
 //!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
@@ -399,13 +400,51 @@ pub fn bounce_source(lights: &LightsUniform) -> u32 {
     }
 }
 
-/// The lighting pass's `fs_main` for transmittance method `method` and bounce source `bounce`
-/// ([`bounce_source`]).
+/// The WGSL override that fixes where a pipeline's `diffusion` takes its lateral light from
+/// (transmittance.wgsl, `LATERAL_SOURCE`).
+const LATERAL_CONSTANT: &str = "LATERAL_SOURCE";
+
+/// Where the lighting pass takes `diffusion`'s lateral light from for `lights`: 0 nowhere
+/// (another method, or no taps), 1 the lateral map alone, 2 the taps at every pixel (no map).
+/// A pipeline per source, so that the map's holds no tap loop.
+pub fn lateral_source(lights: &LightsUniform) -> u32 {
+    let diffusion = crate::settings::TransmittanceMethod::Diffusion.code();
+    if lights.transmittance != diffusion || lights.lateral_taps == 0 {
+        0
+    } else if lights.lateral_downsample > 1 {
+        1
+    } else {
+        2
+    }
+}
+
+/// What one lighting pipeline is built for: the lights' transmittance method
+/// (`TransmittanceMethod::code`), its bounce source ([`bounce_source`]) and its lateral
+/// light's source ([`lateral_source`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightingVariant {
+    pub method: u32,
+    pub bounce: u32,
+    pub lateral: u32,
+}
+
+impl LightingVariant {
+    /// The variant `lights` asks for.
+    pub fn for_lights(lights: &LightsUniform) -> Self {
+        Self {
+            method: lights.transmittance,
+            bounce: bounce_source(lights),
+            lateral: lateral_source(lights),
+        }
+    }
+}
+
+/// The lighting pass's `fs_main` built for `variant`.
 fn lighting_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
-    (method, bounce): (u32, u32),
+    variant: LightingVariant,
 ) -> wgpu::RenderPipeline {
     util::MeshPipeline {
         label: "lighting",
@@ -419,8 +458,9 @@ fn lighting_pipeline(
         cull_mode: None,
         depth: util::DepthTest::Prepassed,
         constants: &[
-            (METHOD_CONSTANT, f64::from(method)),
-            (BOUNCE_CONSTANT, f64::from(bounce)),
+            (METHOD_CONSTANT, f64::from(variant.method)),
+            (BOUNCE_CONSTANT, f64::from(variant.bounce)),
+            (LATERAL_CONSTANT, f64::from(variant.lateral)),
         ],
     }
     .create(device)
@@ -429,10 +469,9 @@ fn lighting_pipeline(
 pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,
-    /// `fs_main` built per transmittance method (`TransmittanceMethod::code`), each kept once
-    /// built: switching methods back and forth in the viewer compiles each once. See
-    /// [`Self::specialize`].
-    pipelines: Vec<((u32, u32), wgpu::RenderPipeline)>,
+    /// `fs_main` built per [`LightingVariant`], each kept once built: switching methods back
+    /// and forth in the viewer compiles each once. See [`Self::specialize`].
+    pipelines: Vec<(LightingVariant, wgpu::RenderPipeline)>,
     /// The index in `pipelines` of the method the lights uniform asks for.
     current: usize,
     module: wgpu::ShaderModule,
@@ -503,7 +542,7 @@ impl LightingPass {
         });
         let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
         let bounce_layer = bounce_layer(lights);
-        let key = (lights.transmittance, bounce_source(lights));
+        let key = LightingVariant::for_lights(lights);
         let no_flux = crate::passes::bounce::dummy_views(device);
         let flux = shadow
             .flux
@@ -614,8 +653,9 @@ impl LightingPass {
             &[&frame_layout, object_layout, maps_layout, &lateral_layout],
         );
         // Back faces culled, so no depth pre-pass is needed to run the taps about once a texel
-        // (the lighting pass draws both sides, for open meshes: a pixel whose back face shows,
-        // or a mirrored object's, finds no texel of its surface and gathers its own taps).
+        // (the lighting pass draws both sides, for open meshes: a pixel whose back face shows
+        // finds no texel of its surface and takes the chord's slab alone; mesh transforms
+        // keep mirrored objects' winding, `Mesh::transform`).
         // Against a pre-pass and both sides, interleaved at 1280x720: the pass 17 ms instead
         // of 22, the lighting pass unchanged (docs/performance.md).
         // Only `diffusion` reads the lateral map.
@@ -691,16 +731,14 @@ impl LightingPass {
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.prepare_lateral(&ctx.queue, &lateral_lights(lights));
         self.bounce_layer = bounce_layer(lights);
-        self.specialize(&ctx.device, lights.transmittance, bounce_source(lights));
+        self.specialize(&ctx.device, LightingVariant::for_lights(lights));
     }
 
-    /// Makes the lighting pipeline the one for transmittance method `method`
-    /// (`TransmittanceMethod::code`, as `LightsUniform::transmittance`) and bounce source
-    /// `bounce` ([`bounce_source`]), building it the first time it is asked for. Each has its
-    /// own pipeline so that the shader compiler drops the others' code (transmittance.wgsl,
-    /// `TRANSMITTANCE_METHOD`; lighting.wgsl, `BOUNCE_SOURCE`).
-    pub fn specialize(&mut self, device: &wgpu::Device, method: u32, bounce: u32) {
-        let key = (method, bounce);
+    /// Makes the lighting pipeline the one built for `key`, building it the first time it is
+    /// asked for. Each variant has its own pipeline so that the shader compiler drops the
+    /// others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`;
+    /// lighting.wgsl, `BOUNCE_SOURCE`).
+    pub fn specialize(&mut self, device: &wgpu::Device, key: LightingVariant) {
         self.current = match self.pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
@@ -949,5 +987,26 @@ impl LightingPass {
             self.draw_objects(&mut pass, &self.pipelines[self.current].1, objects, maps);
         }
         timer.end(profiler, encoder);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_frame_without_a_map_builds_the_per_pixel_taps() {
+        let mut lights: LightsUniform = bytemuck::Zeroable::zeroed();
+        lights.transmittance = TransmittanceMethod::Diffusion.code();
+        lights.lateral_taps = 12;
+        lights.lateral_downsample = 4;
+        assert_eq!(lateral_source(&lights), 1);
+        lights.lateral_downsample = 1;
+        assert_eq!(lateral_source(&lights), 2);
+        lights.lateral_taps = 0;
+        assert_eq!(lateral_source(&lights), 0);
+        lights.lateral_taps = 12;
+        lights.transmittance = TransmittanceMethod::Paper.code();
+        assert_eq!(lateral_source(&lights), 0);
     }
 }

@@ -9,6 +9,14 @@
 // 117 ms against 77 specialized; on GPUs the unused branches still cost registers).
 override TRANSMITTANCE_METHOD: u32 = 255u;
 
+// Where this pipeline's `diffusion` takes its lateral light from (lighting.rs,
+// `lateral_source`): 0 nowhere (another method, or no taps), 1 the lateral map alone, 2 the
+// taps at the pixel (no map), 255 the map where `screen.from_map` and one exists, else the
+// taps (the texture-space pass). A pipeline per source, as for the method: the map's pipeline
+// holds no tap loop, which llvmpipe runs for every pixel once any pixel needs it (7 of the
+// lighting pass's 117 ms at 640x360) and a GPU pays for in registers.
+override LATERAL_SOURCE: u32 = 255u;
+
 fn transmittance_method() -> u32 {
     if (TRANSMITTANCE_METHOD == 255u) {
         return lights.transmittance;
@@ -365,15 +373,6 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
 // curved rim where the plane leaves the surface within a texel takes the texel nearest its
 // depth instead (lateral_from_map).
 const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
-// The map serves only where its texels are at most this many of the kernel's decay lengths
-// (1 / lateral_decay) apart on the surface. The renderer sizes the map for texels of
-// `lateral_texel_mm` (4 mm, about one decay length for skin1) on the nearest translucent
-// object; this bound keeps a farther object's pixels, whose texels would span centimetres,
-// gathering their own taps. Across a step in thickness (a palm beside the finger roots),
-// where the lateral light changes several-fold within a decay length, texels 1.8 decay
-// lengths apart (6.8 mm) still read within the taps' own quadrature error of the converged
-// sum (tests/transmittance.rs).
-const LATERAL_MAX_TEXEL: f32 = 4.0;
 // Below this share of the bilinear weight on the pixel's own surface, the pixel takes the
 // texel of the 4 x 4 around it nearest its depth rather than blend texels of other surfaces.
 const LATERAL_MIN_WEIGHT: f32 = 0.3;
@@ -407,15 +406,15 @@ fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 
 // directly hold no taps: on a surface facing the light (`facing`), where only acne or a
 // penumbra leaves the pixel partly unlit, they count as no lateral light; behind it (a rim
 // past the terminator) they are left out. Where the four carry too little of the weight (a
-// silhouette, a depth edge) the nearest texel in depth serves (below). w < 0 where the map
-// cannot serve (its texels too far apart on this object, or no texel of the pixel's surface
-// within the 4 x 4), and the caller gathers the taps itself.
-fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32> {
+// silhouette, a depth edge) the nearest texel in depth serves (below); where none of the
+// 4 x 4 lies on the pixel's surface (a back face of an open mesh, which the lateral pass
+// culls) there is no lateral light, and the chord's slab alone serves.
+// The renderer sizes the map for the nearest skin (`lateral_texel_mm` there) and keeps the
+// farthest skin's texels within twice that (settings, `MAX_FAR_TEXEL_FACTOR`), so that every
+// pixel can read it: before, pixels whose texels lay more than four decay lengths apart
+// gathered their own taps, which made every far character pay for the taps at each pixel.
+fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec3<f32> {
     let units_per_mm = object.world_per_mm * object.translucency;
-    let texel_mm = f32(lights.lateral_downsample) * screen.depth / (camera.focal_px * units_per_mm);
-    if (texel_mm * object.lateral_decay > LATERAL_MAX_TEXEL) {
-        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
-    }
     let size = vec2<i32>(textureDimensions(lateral_map));
     // The map renders the same projection into fewer pixels: texel centres at (i + 0.5) / scale.
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
@@ -447,10 +446,10 @@ fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32>
         }
     }
     if (weight >= LATERAL_MIN_WEIGHT) {
-        return vec4<f32>(sum / weight, 1.0);
+        return sum / weight;
     }
     if (facing && weight + lit_weight >= LATERAL_MIN_WEIGHT) {
-        return vec4<f32>(sum / (weight + lit_weight), 1.0);
+        return sum / (weight + lit_weight);
     }
     // A silhouette or a depth edge: the texel of the 4 x 4 around the pixel nearest its depth
     // (lit ones only on a surface facing the light), as the bounce's read does. Gathering the
@@ -472,10 +471,7 @@ fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec4<f32>
             nearest = vec4<f32>(select(t.rgb, vec3<f32>(0.0), t.w < 0.0), gap);
         }
     }
-    if (nearest.w < LATERAL_NEAREST_TOLERANCES * tolerance) {
-        return vec4<f32>(nearest.rgb, 1.0);
-    }
-    return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    return nearest.rgb;
 }
 
 struct Transmitted {
@@ -556,17 +552,16 @@ fn transmittance(light: Light, index: u32, p: vec3<f32>, n_vertex: vec3<f32>, l:
                 // medium keeps the light in (a finger, a wedge), the lateral one where light
                 // finds a shorter way than the chord (a palm beside the finger roots). Each is
                 // low where the other holds; the larger one counts.
-                if (lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
+                if (LATERAL_SOURCE != 0u && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
                     let flux = lut_row(s_shape, DIFFUSION_RANGE_MM, FLUX_ROW);
                     let shape = select(vec3<f32>(0.0), exit / flux, flux > vec3<f32>(1e-7));
-                    var lateral = vec4<f32>(0.0, 0.0, 0.0, -1.0);
-                    if (screen.from_map && lights.lateral_downsample > 1u) {
+                    var lateral: vec3<f32>;
+                    if (LATERAL_SOURCE == 1u || (LATERAL_SOURCE == 255u && screen.from_map && lights.lateral_downsample > 1u)) {
                         lateral = lateral_from_map(index, screen, facing > 0.0);
+                    } else {
+                        lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
                     }
-                    if (lateral.w < 0.0) {
-                        lateral = vec4<f32>(lateral_transmittance(light, p, n_vertex, l, s_mm), 1.0);
-                    }
-                    diffuse = max(diffuse, shape * lateral.rgb);
+                    diffuse = max(diffuse, shape * lateral);
                 }
                 out.diffuse = diffuse * unlit;
                 let ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);

@@ -87,10 +87,12 @@ pub struct TransmittanceSettings {
     pub lateral_taps: u32,
     /// `diffusion`: the lateral taps run on a map whose texels are about this many profile
     /// millimetres apart on the skin (0..=50), in a pass of their own, and each pixel
-    /// interpolates the four nearest results on its own surface (where none is, it runs the
-    /// taps itself). The light they gather varies over millimetres, not pixels, so the map's
-    /// reduction follows the skin's size on screen (`lateral_downsample`): the same texels in
-    /// millimetres at any resolution. 0 runs them at every pixel inside the lighting pass.
+    /// interpolates the four nearest results on its own surface (where none is, the nearest in
+    /// depth of the 4 x 4 around it). The light they gather varies over millimetres, not
+    /// pixels, so the map's reduction follows the skin's size on screen (`lateral_downsample`):
+    /// the same texels in millimetres at any resolution, on the nearest skin (farther skin
+    /// gets coarser ones, within [`MAX_FAR_TEXEL_FACTOR`]). 0 runs them at every pixel inside
+    /// the lighting pass.
     pub lateral_texel_mm: f32,
 }
 
@@ -99,18 +101,37 @@ pub const DEFAULT_LATERAL_TEXEL_MM: f32 = 4.0;
 /// Largest reduction of the lateral map (one texel per 8 x 8 pixels).
 pub const MAX_LATERAL_DOWNSAMPLE: u32 = 8;
 
-/// The lateral map's reduction for skin whose pixels are `pixel_mm` profile millimetres apart
-/// at its smallest on screen: texels of at most `texel_mm`, 1 (no map) where a texel would
-/// not hold two pixels a side, at most [`MAX_LATERAL_DOWNSAMPLE`].
-pub fn lateral_downsample(texel_mm: f32, pixel_mm: f32) -> u32 {
-    if !(texel_mm > 0.0 && pixel_mm > 0.0) {
+/// How much coarser than `lateral_texel_mm` the map's texels may come out on the farthest skin
+/// in view. Every pixel of a frame with a map reads it (a pipeline that gathers taps per pixel
+/// is built only where there is none, lighting.rs `lateral_source`), so a far object beside a
+/// near one must still find texels fine enough: 8 mm at the default 4, about two of skin1's
+/// decay lengths. Across a step in thickness the map's error stays near the taps' own there
+/// and grows past it at coarser texels (tests/transmittance.rs,
+/// `far_skin_reads_a_map_fine_enough_for_it`: at 13 mm texels one pixel beside the step read
+/// +77 %).
+pub const MAX_FAR_TEXEL_FACTOR: f32 = 2.0;
+
+/// The lateral map's reduction for skin whose pixels are `near_mm` profile millimetres apart
+/// on the nearest object in view and `far_mm` on the farthest: texels of at most `texel_mm`
+/// on the nearest and [`MAX_FAR_TEXEL_FACTOR`] times that on the farthest, at most
+/// [`MAX_LATERAL_DOWNSAMPLE`]. Where that leaves less than two pixels a side, two, as long as
+/// the nearest skin's texels stay within the factor (skin small on screen, as a crowd of
+/// characters: the taps at every pixel cost four times the map's); 1 (no map, the taps at
+/// every pixel) only for skin smaller still. A far object smaller on screen than the bound
+/// allows reads texels coarser than it: a handful of pixels.
+pub fn lateral_downsample(texel_mm: f32, near_mm: f32, far_mm: f32) -> u32 {
+    if !(texel_mm > 0.0 && near_mm > 0.0) {
         return 1;
     }
-    let n = (texel_mm / pixel_mm).floor();
-    if n < 2.0 {
-        1
+    let near = (texel_mm / near_mm).floor();
+    let far = (MAX_FAR_TEXEL_FACTOR * texel_mm / far_mm.max(near_mm)).floor();
+    let n = near.min(far).min(MAX_LATERAL_DOWNSAMPLE as f32);
+    if n >= 2.0 {
+        n as u32
+    } else if 2.0 * near_mm <= MAX_FAR_TEXEL_FACTOR * texel_mm {
+        2
     } else {
-        (n as u32).min(MAX_LATERAL_DOWNSAMPLE)
+        1
     }
 }
 
@@ -155,5 +176,29 @@ impl TransmittanceSettings {
             "in 0..=50",
         )?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_lateral_map_is_sized_for_the_nearest_and_the_farthest_skin() {
+        // One object: texels of 4 mm, at least two pixels a side, at most 8.
+        assert_eq!(lateral_downsample(4.0, 1.0, 1.0), 4);
+        assert_eq!(lateral_downsample(4.0, 0.1, 0.1), MAX_LATERAL_DOWNSAMPLE);
+        // Skin small on screen: two pixels a texel while the texels stay within the factor.
+        assert_eq!(lateral_downsample(4.0, 2.5, 2.5), 2);
+        assert_eq!(lateral_downsample(4.0, 4.0, 4.0), 2);
+        assert_eq!(lateral_downsample(4.0, 4.5, 4.5), 1);
+        assert_eq!(lateral_downsample(0.0, 1.0, 1.0), 1);
+        assert_eq!(lateral_downsample(4.0, f32::NAN, 1.0), 1);
+        // A far object at 3.3 mm a pixel beside a near one at 0.55: texels of at most 8 mm on
+        // it (2 pixels), not the near one's 7.
+        assert_eq!(lateral_downsample(4.0, 0.55, 3.3), 2);
+        assert_eq!(lateral_downsample(4.0, 0.55, 1.1), 7);
+        // Too far for even two pixels a texel: the map stays (the near object needs it).
+        assert_eq!(lateral_downsample(4.0, 0.55, 40.0), 2);
     }
 }
