@@ -88,9 +88,9 @@ pub struct SettingsArgs {
     pub lateral_taps: Option<u32>,
     /// Diffusion: run the lateral taps on a reduced-resolution map whose texels lie about MM
     /// profile millimetres apart on the nearest skin (0..=50; the reduction follows the skin's
-    /// size on screen, 2x2 to 8x8 pixels a texel, and keeps the farthest skin's texels within
-    /// twice MM); each pixel interpolates the nearest results on its own surface, or the
-    /// texel nearest its depth where there are none; 0 = at every pixel
+    /// size on screen, 2x2 to 8x8 pixels a texel); each pixel interpolates the nearest results
+    /// on its own surface, or the texel nearest its depth where there are none; skin whose
+    /// texels would span more than 4 MM runs the taps at each pixel; 0 = at every pixel
     /// [default: render.transmittance.lateral_texel_mm, 4].
     #[arg(long, value_name = "MM")]
     pub lateral_texel_mm: Option<f32>,

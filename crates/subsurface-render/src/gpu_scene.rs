@@ -351,10 +351,9 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
 
 /// The lateral map's reduction for `scene` at `width` x `height` with `settings`
 /// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
-/// the translucent objects in view nearest and farthest in those terms, at the depth of their
-/// bounds' centres (at least the near plane), so that the map's texels are the same
-/// millimetres at any resolution and zoom, and fine enough for the farthest skin too (every
-/// pixel reads the map where there is one). Objects wholly outside the view do not count. 1 (no
+/// the translucent object in view nearest in those terms ([`skin_pixel_mm`]), so that the
+/// map's texels are the same millimetres at any resolution and zoom (a farther object whose
+/// texels come out too coarse gathers its own taps, [`lateral_taps_objects`]). 1 (no
 /// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
 /// transmitted light from its UV-space pass).
 pub fn lateral_downsample(
@@ -372,23 +371,58 @@ pub fn lateral_downsample(
     {
         return 1;
     }
+    let pixel_mm = skin_pixel_mm(scene, width, height)
+        .into_iter()
+        .flatten()
+        .fold(f32::INFINITY, f32::min);
+    crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
+}
+
+/// For each object of `scene` seen at `width` x `height`: the size of a pixel in its profile
+/// millimetres at the depth of its bounds' centre (at least the near plane), where it is
+/// translucent and may lie in view; `None` elsewhere.
+fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
     let camera = camera_uniform(scene, width, height);
     let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
-    let (near_mm, far_mm) = scene
+    scene
         .objects
         .iter()
-        .filter(|o| o.material.translucency > 0.0 && in_view(view_proj, o.world_bounds()))
         .map(|o| {
+            if !(o.material.translucency > 0.0 && in_view(view_proj, o.world_bounds())) {
+                return None;
+            }
             let (lo, hi) = o.world_bounds();
             let depth = ((lo + hi) * 0.5 - position).dot(forward).max(camera.near);
-            depth / camera.focal_px / (world_per_mm(o) * o.material.translucency)
+            let mm = depth / camera.focal_px / (world_per_mm(o) * o.material.translucency);
+            (mm.is_finite() && mm > 0.0).then_some(mm)
         })
-        .filter(|mm| mm.is_finite() && *mm > 0.0)
-        .fold((f32::INFINITY, 0.0f32), |(near, far), mm| {
-            (near.min(mm), far.max(mm))
-        });
-    crate::settings::lateral_downsample(t.lateral_texel_mm, near_mm, far_mm)
+        .collect()
+}
+
+/// Which of the uploaded objects (those with triangles, in the scene's order, as
+/// [`upload_objects`] makes them) gather `diffusion`'s lateral taps at each pixel although the
+/// frame has a lateral map of reduction `downsample`: skin so much farther than the nearest
+/// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
+/// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
+/// (passes::lighting, `lateral_source`); every other pixel reads the map with one that does not.
+pub fn lateral_taps_objects(
+    scene: &Scene,
+    settings: &crate::settings::RenderSettings,
+    width: u32,
+    height: u32,
+    downsample: u32,
+) -> Vec<bool> {
+    let t = &settings.transmittance;
+    let limit = crate::settings::MAX_TEXEL_FACTOR * t.lateral_texel_mm;
+    let coarse = |mm: Option<f32>| mm.is_some_and(|mm| downsample as f32 * mm > limit);
+    scene
+        .objects
+        .iter()
+        .zip(skin_pixel_mm(scene, width, height))
+        .filter(|(o, _)| !o.mesh.indices.is_empty())
+        .map(|(_, mm)| downsample > 1 && coarse(mm))
+        .collect()
 }
 
 /// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
@@ -609,7 +643,7 @@ mod tests {
     }
 
     /// The map's texels stay about `lateral_texel_mm` on the skin: twice the pixels, twice
-    /// the reduction (up to 8), and none where the skin is too small on screen.
+    /// the reduction (up to 8), 2 for skin small on screen and none where it is smaller still.
     #[test]
     fn lateral_map_reduction_follows_the_skin_on_screen() {
         let scene = Scene::default_scene();
@@ -620,10 +654,53 @@ mod tests {
         );
         assert_eq!((r256, r512), (3, 6));
         assert_eq!(downsample(&scene, &s, 1280, 720), 8);
-        assert_eq!(downsample(&scene, &s, 64, 64), 1);
+        // Small on screen: two pixels a texel while that stays within MAX_TEXEL_FACTOR.
+        assert_eq!(downsample(&scene, &s, 64, 64), 2);
+        assert_eq!(downsample(&scene, &s, 32, 32), 1);
         let mut per_pixel = s.clone();
         per_pixel.transmittance.lateral_texel_mm = 0.0;
         assert_eq!(downsample(&scene, &per_pixel, 512, 512), 1);
+    }
+
+    /// Skin whose texels would span more than `MAX_TEXEL_FACTOR` times `lateral_texel_mm`
+    /// gathers the taps itself: none of the default scene's objects, and every object but the
+    /// nearest once moved back to six times its distance along the view (the map stays sized
+    /// for the nearest).
+    #[test]
+    fn skin_too_far_for_the_map_gathers_its_own_taps() {
+        let scene = Scene::default_scene();
+        let s = scene.desc.render.clone();
+        let n = downsample(&scene, &s, 1280, 720);
+        let flags = lateral_taps_objects(&scene, &s, 1280, 720, n);
+        assert_eq!(flags.len(), scene.objects.len());
+        assert!(flags.iter().all(|&t| !t), "{flags:?}");
+        let pixel_mm = skin_pixel_mm(&scene, 1280, 720);
+        let nearest = (0..pixel_mm.len())
+            .filter(|&i| pixel_mm[i].is_some())
+            .min_by(|&a, &b| pixel_mm[a].partial_cmp(&pixel_mm[b]).unwrap())
+            .unwrap();
+        let camera = camera_uniform(&scene, 1280, 720);
+        let (eye, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+        let mut far = scene.clone();
+        for (i, o) in far.objects.iter_mut().enumerate() {
+            if i != nearest {
+                let (lo, hi) = o.world_bounds();
+                let depth = ((lo + hi) * 0.5 - eye).dot(forward);
+                o.transform = Mat4::from_translation(forward * 5.0 * depth) * o.transform;
+            }
+        }
+        assert_eq!(downsample(&far, &s, 1280, 720), n);
+        let flags = lateral_taps_objects(&far, &s, 1280, 720, n);
+        for (i, flag) in flags.iter().enumerate() {
+            let skin = pixel_mm[i].is_some();
+            assert_eq!(*flag, skin && i != nearest, "object {i}: {flags:?}");
+        }
+        // Without a map nothing is marked.
+        assert!(
+            lateral_taps_objects(&far, &s, 1280, 720, 1)
+                .iter()
+                .all(|&t| !t)
+        );
     }
 
     /// No map where nothing reads it: other transmittance methods without the bounce, no

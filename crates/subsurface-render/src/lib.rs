@@ -24,7 +24,7 @@ pub use passes::tonemap::DebugView;
 pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
-    BounceSettings, DEFAULT_LATERAL_TEXEL_MM, MAX_FAR_TEXEL_FACTOR, MAX_LATERAL_DOWNSAMPLE,
+    BounceSettings, DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,
     RenderSettings, SssFetch, SssMethod, SssSettings, TransmittanceMethod, TransmittanceSettings,
 };
 pub use timing::PassTiming;

@@ -182,6 +182,22 @@ fn shadow_maps<'a>(
     maps
 }
 
+/// The objects the lighting pass draws with the pipeline that gathers `diffusion`'s lateral
+/// taps itself although the frame has a lateral map (`gpu_scene::lateral_taps_objects`).
+fn taps_objects(
+    scene: &Scene,
+    options: &RenderOptions,
+    lights: &crate::uniforms::LightsUniform,
+) -> Vec<bool> {
+    gpu_scene::lateral_taps_objects(
+        scene,
+        &options.settings,
+        options.width(),
+        options.height(),
+        lights.lateral_downsample,
+    )
+}
+
 fn thickness_flag(view: DebugView) -> u32 {
     (view == DebugView::Thickness) as u32
 }
@@ -264,7 +280,7 @@ impl Renderer {
             .tsm
             .then(|| TsmPass::new(ctx, &object_layout, &lights.layers, lights.atlas_size));
         let tsm_dummy = texture_space::dummy_tsm_view(device);
-        let lighting = LightingPass::with_maps(
+        let mut lighting = LightingPass::with_maps(
             ctx,
             &object_layout,
             &maps_layout,
@@ -273,6 +289,7 @@ impl Renderer {
             shadow_maps(&shadow, &bounce),
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
+        lighting.set_taps_objects(device, taps_objects(scene, &options, &lights.uniform));
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
         let targets = LightingTargets::with_lateral(
             ctx,
@@ -432,6 +449,8 @@ impl Renderer {
                 self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
             );
         }
+        self.lighting
+            .set_taps_objects(&device, taps_objects(scene, options, &lights.uniform));
         let texture_signature = (settings, skin_flags(scene));
         if reuploaded || texture_signature != self.texture_signature {
             self.texture_space =

@@ -883,13 +883,12 @@ fn lateral_map_does_not_cross_depth_edges() {
 
 /// The stepped block 600 mm away (3.3 mm a pixel) beside a small sheet of skin 100 mm from
 /// the camera (0.55 mm a pixel), as a character far behind a near one. The map is sized for the
-/// near sheet's 4 mm texels, and every pixel of a frame with a map reads it, so the far block
-/// must get texels fine enough for its step (`MAX_FAR_TEXEL_FACTOR`): sized for the near
-/// sheet alone (a 7x reduction, 23 mm texels on the block) its row's mean error against the
-/// converged taps was 0.032, against the twelve taps' own 0.007; with the bound (a 2x
-/// reduction, 6.6 mm texels) 0.011.
+/// near sheet's 4 mm texels (a 7x reduction), which makes the block's 23 mm: more than
+/// `MAX_TEXEL_FACTOR` times 4, so the block is drawn with the pipeline that gathers the taps
+/// at each pixel, and keeps their accuracy. Read from the map, its row's mean error against
+/// the converged taps was 0.032, against the twelve taps' own 0.007.
 #[test]
-fn far_skin_reads_a_map_fine_enough_for_it() {
+fn far_skin_gathers_its_own_taps() {
     if context().is_none() {
         return;
     }
@@ -903,7 +902,6 @@ fn far_skin_reads_a_map_fine_enough_for_it() {
     );
     let per_pixel = stepped_block_seen(taps, 0.0, 0.6, &near);
     let mapped = stepped_block_seen(taps, DEFAULT_LATERAL_TEXEL_MM, 0.6, &near);
-    assert_ne!(mapped, per_pixel, "the lateral map was not read");
     let row = row_red(&truth);
     let mean_error = |img: &[[f32; 4]]| {
         row.iter()
@@ -913,7 +911,7 @@ fn far_skin_reads_a_map_fine_enough_for_it() {
     };
     let (pp, map) = (mean_error(&per_pixel), mean_error(&mapped));
     assert!(
-        map <= pp + 0.01,
-        "far block: the map's mean error {map} against the per-pixel taps' {pp}"
+        map <= pp + 0.002,
+        "far block: mean error {map} against the per-pixel taps' {pp}"
     );
 }

@@ -405,7 +405,8 @@ pub fn bounce_source(lights: &LightsUniform) -> u32 {
 const LATERAL_CONSTANT: &str = "LATERAL_SOURCE";
 
 /// Where the lighting pass takes `diffusion`'s lateral light from for `lights`: 0 nowhere
-/// (another method, or no taps), 1 the lateral map alone, 2 the taps at every pixel (no map).
+/// (another method, or no taps), 1 the lateral map alone, 2 the taps at every pixel (no map;
+/// with a map, the variant [`LightingPass::set_taps_objects`] draws skin too far for it with).
 /// A pipeline per source, so that the map's holds no tap loop.
 pub fn lateral_source(lights: &LightsUniform) -> u32 {
     let diffusion = crate::settings::TransmittanceMethod::Diffusion.code();
@@ -472,8 +473,13 @@ pub struct LightingPass {
     /// `fs_main` built per [`LightingVariant`], each kept once built: switching methods back
     /// and forth in the viewer compiles each once. See [`Self::specialize`].
     pipelines: Vec<(LightingVariant, wgpu::RenderPipeline)>,
-    /// The index in `pipelines` of the method the lights uniform asks for.
+    /// The index in `pipelines` of the variant the lights uniform asks for.
     current: usize,
+    /// Where `current` reads the lateral map: the index in `pipelines` of its variant that
+    /// gathers the taps at each pixel instead, for the objects `taps_objects` marks (skin too
+    /// far for the map's texels, [`Self::set_taps_objects`]).
+    taps: Option<usize>,
+    taps_objects: Vec<bool>,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// `[first pass, later passes][one light, two lights]`: `fs_lateral` into one layer of the
@@ -695,6 +701,8 @@ impl LightingPass {
         Self {
             prepass,
             pipelines: vec![(key, pipeline)],
+            taps: None,
+            taps_objects: Vec::new(),
             current: 0,
             module,
             layout,
@@ -738,15 +746,35 @@ impl LightingPass {
     /// asked for. Each variant has its own pipeline so that the shader compiler drops the
     /// others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`;
     /// lighting.wgsl, `BOUNCE_SOURCE`).
+    /// Objects drawn with it by a pipeline that gathers the taps itself are forgotten: call
+    /// [`Self::set_taps_objects`] after it.
     pub fn specialize(&mut self, device: &wgpu::Device, key: LightingVariant) {
-        self.current = match self.pipelines.iter().position(|(k, _)| *k == key) {
+        self.current = self.pipeline_index(device, key);
+        self.taps = None;
+        self.taps_objects.clear();
+    }
+
+    /// The index in `pipelines` of `key`'s pipeline, built the first time it is asked for.
+    fn pipeline_index(&mut self, device: &wgpu::Device, key: LightingVariant) -> usize {
+        match self.pipelines.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
                 let pipeline = lighting_pipeline(device, &self.layout, &self.module, key);
                 self.pipelines.push((key, pipeline));
                 self.pipelines.len() - 1
             }
-        };
+        }
+    }
+
+    /// Marks the objects (`objects[i]` of [`Self::encode`]) that gather `diffusion`'s lateral
+    /// taps at each pixel although the frame reads them from the lateral map
+    /// (`gpu_scene::lateral_taps_objects`: skin whose texels would be too coarse), and builds
+    /// their pipeline the first time. Ignored where the current variant reads no map.
+    pub fn set_taps_objects(&mut self, device: &wgpu::Device, objects: Vec<bool>) {
+        let key = self.pipelines[self.current].0;
+        self.taps = (key.lateral == 1 && objects.contains(&true))
+            .then(|| self.pipeline_index(device, LightingVariant { lateral: 2, ..key }));
+        self.taps_objects = objects;
     }
 
     /// Writes the lateral pass's light indices for `lights` ([`lateral_lights`]), two per
@@ -767,6 +795,30 @@ impl LightingPass {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
         for (i, o) in objects.iter().enumerate() {
+            pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
+            o.draw(pass);
+        }
+    }
+
+    /// The lighting pass's draws: each object with the current pipeline, or its variant that
+    /// gathers the taps itself where [`Self::set_taps_objects`] marked the object.
+    fn draw_lit_objects(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+    ) {
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
+        let mut bound = None;
+        for (i, o) in objects.iter().enumerate() {
+            let index = match self.taps {
+                Some(taps) if self.taps_objects.get(i) == Some(&true) => taps,
+                _ => self.current,
+            };
+            if bound != Some(index) {
+                pass.set_pipeline(&self.pipelines[index].1);
+                bound = Some(index);
+            }
             pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
             o.draw(pass);
         }
@@ -984,7 +1036,7 @@ impl LightingPass {
                 multiview_mask: None,
             });
             pass.set_bind_group(3, &targets.screen, &[]);
-            self.draw_objects(&mut pass, &self.pipelines[self.current].1, objects, maps);
+            self.draw_lit_objects(&mut pass, objects, maps);
         }
         timer.end(profiler, encoder);
     }

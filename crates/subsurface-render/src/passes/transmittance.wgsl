@@ -11,8 +11,9 @@ override TRANSMITTANCE_METHOD: u32 = 255u;
 
 // Where this pipeline's `diffusion` takes its lateral light from (lighting.rs,
 // `lateral_source`): 0 nowhere (another method, or no taps), 1 the lateral map alone, 2 the
-// taps at the pixel (no map), 255 the map where `screen.from_map` and one exists, else the
-// taps (the texture-space pass). A pipeline per source, as for the method: the map's pipeline
+// taps at the pixel (no map, or skin too far for the map's texels: the renderer draws it with
+// this variant, gpu_scene.rs `lateral_taps_objects`), 255 the map where `screen.from_map` and
+// one exists, else the taps (the texture-space pass). A pipeline per source, as for the method: the map's pipeline
 // holds no tap loop, which llvmpipe runs for every pixel once any pixel needs it (7 of the
 // lighting pass's 117 ms at 640x360) and a GPU pays for in registers.
 override LATERAL_SOURCE: u32 = 255u;
@@ -409,10 +410,9 @@ fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 
 // silhouette, a depth edge) the nearest texel in depth serves (below); where none of the
 // 4 x 4 lies on the pixel's surface (a back face of an open mesh, which the lateral pass
 // culls) there is no lateral light, and the chord's slab alone serves.
-// The renderer sizes the map for the nearest skin (`lateral_texel_mm` there) and keeps the
-// farthest skin's texels within twice that (settings, `MAX_FAR_TEXEL_FACTOR`), so that every
-// pixel can read it: before, pixels whose texels lay more than four decay lengths apart
-// gathered their own taps, which made every far character pay for the taps at each pixel.
+// The renderer sizes the map for the nearest skin (`lateral_texel_mm` there); skin whose
+// texels come out more than `MAX_TEXEL_FACTOR` times coarser is drawn with a pipeline that
+// gathers the taps itself (LATERAL_SOURCE 2), so this one need not hold them.
 fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec3<f32> {
     let units_per_mm = object.world_per_mm * object.translucency;
     let size = vec2<i32>(textureDimensions(lateral_map));

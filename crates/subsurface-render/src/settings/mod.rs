@@ -9,7 +9,7 @@ mod transmittance;
 pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{
-    DEFAULT_LATERAL_TEXEL_MM, MAX_FAR_TEXEL_FACTOR, MAX_LATERAL_DOWNSAMPLE, TransmittanceMethod,
+    DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR, TransmittanceMethod,
     TransmittanceSettings, lateral_downsample,
 };
 

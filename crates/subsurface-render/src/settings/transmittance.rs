@@ -90,9 +90,9 @@ pub struct TransmittanceSettings {
     /// interpolates the four nearest results on its own surface (where none is, the nearest in
     /// depth of the 4 x 4 around it). The light they gather varies over millimetres, not
     /// pixels, so the map's reduction follows the skin's size on screen (`lateral_downsample`):
-    /// the same texels in millimetres at any resolution, on the nearest skin (farther skin
-    /// gets coarser ones, within [`MAX_FAR_TEXEL_FACTOR`]). 0 runs them at every pixel inside
-    /// the lighting pass.
+    /// the same texels in millimetres at any resolution, on the nearest skin (a farther skin
+    /// whose texels come out coarser than [`MAX_TEXEL_FACTOR`] times this gathers the taps at
+    /// each of its pixels). 0 runs them at every pixel inside the lighting pass.
     pub lateral_texel_mm: f32,
 }
 
@@ -101,34 +101,29 @@ pub const DEFAULT_LATERAL_TEXEL_MM: f32 = 4.0;
 /// Largest reduction of the lateral map (one texel per 8 x 8 pixels).
 pub const MAX_LATERAL_DOWNSAMPLE: u32 = 8;
 
-/// How much coarser than `lateral_texel_mm` the map's texels may come out on the farthest skin
-/// in view. Every pixel of a frame with a map reads it (a pipeline that gathers taps per pixel
-/// is built only where there is none, lighting.rs `lateral_source`), so a far object beside a
-/// near one must still find texels fine enough: 8 mm at the default 4, about two of skin1's
-/// decay lengths. Across a step in thickness the map's error stays near the taps' own there
-/// and grows past it at coarser texels (tests/transmittance.rs,
-/// `far_skin_reads_a_map_fine_enough_for_it`: at 13 mm texels one pixel beside the step read
-/// +77 %).
-pub const MAX_FAR_TEXEL_FACTOR: f32 = 2.0;
+/// How much coarser than `lateral_texel_mm` a skin's lateral-map texels may be for its pixels
+/// to read the map: 16 mm at the default 4, about four of skin1's decay lengths. A skin farther
+/// than the nearest, whose texels come out coarser, is drawn with a lighting pipeline that
+/// gathers the taps at every pixel instead (`gpu_scene::lateral_taps_objects`): across a step
+/// in thickness the map's error there grows past the taps' own (tests/transmittance.rs,
+/// `far_skin_gathers_its_own_taps`: at 23 mm texels the row's mean error 0.032 against the
+/// taps' 0.007).
+pub const MAX_TEXEL_FACTOR: f32 = 4.0;
 
-/// The lateral map's reduction for skin whose pixels are `near_mm` profile millimetres apart
-/// on the nearest object in view and `far_mm` on the farthest: texels of at most `texel_mm`
-/// on the nearest and [`MAX_FAR_TEXEL_FACTOR`] times that on the farthest, at most
+/// The lateral map's reduction for skin whose pixels are `pixel_mm` profile millimetres apart
+/// on the nearest translucent object in view: texels of at most `texel_mm` there, at most
 /// [`MAX_LATERAL_DOWNSAMPLE`]. Where that leaves less than two pixels a side, two, as long as
-/// the nearest skin's texels stay within the factor (skin small on screen, as a crowd of
-/// characters: the taps at every pixel cost four times the map's); 1 (no map, the taps at
-/// every pixel) only for skin smaller still. A far object smaller on screen than the bound
-/// allows reads texels coarser than it: a handful of pixels.
-pub fn lateral_downsample(texel_mm: f32, near_mm: f32, far_mm: f32) -> u32 {
-    if !(texel_mm > 0.0 && near_mm > 0.0) {
+/// the texels stay within [`MAX_TEXEL_FACTOR`] of `texel_mm` (skin small on screen, as a crowd
+/// of characters: the map's pipeline holds no taps, and the taps at every pixel cost several
+/// times the map's); 1 (no map, the taps at every pixel) only for skin smaller still.
+pub fn lateral_downsample(texel_mm: f32, pixel_mm: f32) -> u32 {
+    if !(texel_mm > 0.0 && pixel_mm > 0.0) {
         return 1;
     }
-    let near = (texel_mm / near_mm).floor();
-    let far = (MAX_FAR_TEXEL_FACTOR * texel_mm / far_mm.max(near_mm)).floor();
-    let n = near.min(far).min(MAX_LATERAL_DOWNSAMPLE as f32);
+    let n = (texel_mm / pixel_mm).floor();
     if n >= 2.0 {
-        n as u32
-    } else if 2.0 * near_mm <= MAX_FAR_TEXEL_FACTOR * texel_mm {
+        (n as u32).min(MAX_LATERAL_DOWNSAMPLE)
+    } else if 2.0 * pixel_mm <= MAX_TEXEL_FACTOR * texel_mm {
         2
     } else {
         1
@@ -184,21 +179,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_lateral_map_is_sized_for_the_nearest_and_the_farthest_skin() {
-        // One object: texels of 4 mm, at least two pixels a side, at most 8.
-        assert_eq!(lateral_downsample(4.0, 1.0, 1.0), 4);
-        assert_eq!(lateral_downsample(4.0, 0.1, 0.1), MAX_LATERAL_DOWNSAMPLE);
+    fn the_lateral_map_is_sized_for_the_nearest_skin() {
+        // Texels of 4 mm, at least two pixels a side, at most 8.
+        assert_eq!(lateral_downsample(4.0, 1.0), 4);
+        assert_eq!(lateral_downsample(4.0, 0.55), 7);
+        assert_eq!(lateral_downsample(4.0, 0.1), MAX_LATERAL_DOWNSAMPLE);
+        assert_eq!(lateral_downsample(0.0, 1.0), 1);
+        assert_eq!(lateral_downsample(4.0, f32::NAN), 1);
         // Skin small on screen: two pixels a texel while the texels stay within the factor.
-        assert_eq!(lateral_downsample(4.0, 2.5, 2.5), 2);
-        assert_eq!(lateral_downsample(4.0, 4.0, 4.0), 2);
-        assert_eq!(lateral_downsample(4.0, 4.5, 4.5), 1);
-        assert_eq!(lateral_downsample(0.0, 1.0, 1.0), 1);
-        assert_eq!(lateral_downsample(4.0, f32::NAN, 1.0), 1);
-        // A far object at 3.3 mm a pixel beside a near one at 0.55: texels of at most 8 mm on
-        // it (2 pixels), not the near one's 7.
-        assert_eq!(lateral_downsample(4.0, 0.55, 3.3), 2);
-        assert_eq!(lateral_downsample(4.0, 0.55, 1.1), 7);
-        // Too far for even two pixels a texel: the map stays (the near object needs it).
-        assert_eq!(lateral_downsample(4.0, 0.55, 40.0), 2);
+        assert_eq!(lateral_downsample(4.0, 2.5), 2);
+        assert_eq!(lateral_downsample(4.0, 8.0), 2);
+        assert_eq!(lateral_downsample(4.0, 8.5), 1);
     }
 }
