@@ -746,8 +746,9 @@ impl LightingPass {
     /// asked for. Each variant has its own pipeline so that the shader compiler drops the
     /// others' code (transmittance.wgsl, `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`;
     /// lighting.wgsl, `BOUNCE_SOURCE`).
-    /// Objects drawn with it by a pipeline that gathers the taps itself are forgotten: call
-    /// [`Self::set_taps_objects`] after it.
+    ///
+    /// Which objects gather the taps themselves is forgotten: call [`Self::set_taps_objects`]
+    /// after it.
     pub fn specialize(&mut self, device: &wgpu::Device, key: LightingVariant) {
         self.current = self.pipeline_index(device, key);
         self.taps = None;
@@ -1046,8 +1047,10 @@ impl LightingPass {
 mod tests {
     use super::*;
 
+    /// The frame's pipeline gathers the taps itself only without a map (objects too far for
+    /// the map get that variant through `set_taps_objects`).
     #[test]
-    fn only_a_frame_without_a_map_builds_the_per_pixel_taps() {
+    fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
         let mut lights: LightsUniform = bytemuck::Zeroable::zeroed();
         lights.transmittance = TransmittanceMethod::Diffusion.code();
         lights.lateral_taps = 12;
