@@ -13,9 +13,9 @@ override TRANSMITTANCE_METHOD: u32 = 255u;
 // `lateral_source`): 0 nowhere (another method, or no taps), 1 the lateral map alone, 2 the
 // taps at the pixel (no map, or skin too far for the map's texels: the renderer draws it with
 // this variant, gpu_scene.rs `lateral_taps_objects`), 255 the map where `screen.from_map` and
-// one exists, else the taps (the texture-space pass). A pipeline per source, as for the method: the map's pipeline
-// holds no tap loop, which llvmpipe runs for every pixel once any pixel needs it (7 of the
-// lighting pass's 117 ms at 640x360) and a GPU pays for in registers.
+// one exists, else the taps (the texture-space pass). A pipeline per source, as for the
+// method: the map's pipeline holds no tap loop, which llvmpipe runs for every pixel once any
+// pixel needs it (7 of the lighting pass's 117 ms at 640x360) and a GPU pays for in registers.
 override LATERAL_SOURCE: u32 = 255u;
 
 fn transmittance_method() -> u32 {
