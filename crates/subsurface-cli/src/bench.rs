@@ -63,7 +63,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
     pub lateral_taps: Vec<u32>,
     /// Diffusion runs: the lateral map's texel sizes in profile millimetres (0..=50),
-    /// comma-separated, e.g. 0,2 for the taps at every pixel inside the lighting pass against
+    /// comma-separated, e.g. 0,2 for `diffusion` at every pixel inside the lighting pass against
     /// the lateral pass's map [default: the scene's render.transmittance.lateral_texel_mm].
     /// The table names each run by the reduction it gave (`diffusion/12:4`: 12 taps, one
     /// texel per 4x4 pixels).

@@ -86,11 +86,12 @@ pub struct SettingsArgs {
     /// [default: render.transmittance.lateral_taps, 12].
     #[arg(long, value_name = "N")]
     pub lateral_taps: Option<u32>,
-    /// Diffusion: run the lateral taps on a reduced-resolution map whose texels lie about MM
-    /// profile millimetres apart on the nearest skin (0..=50; the reduction follows the skin's
-    /// size on screen, 2x2 to 8x8 pixels a texel); each pixel interpolates the nearest results
-    /// on its own surface, or the texel nearest its depth where there are none; skin whose
-    /// texels would span more than 4 MM runs the taps at each pixel; 0 = at every pixel
+    /// Diffusion: evaluate it (the lateral taps included) for every light on a
+    /// reduced-resolution map whose texels lie about MM profile millimetres apart on the
+    /// nearest skin (0..=50; the reduction follows the skin's size on screen, 2x2 to 8x8 pixels
+    /// a texel); each pixel reads the lights' sum once, interpolated on its own surface, and
+    /// where the map has no texel of it (an outline) runs each light's chord itself; skin whose
+    /// texels would span more than 4 MM runs everything at each pixel; 0 = at every pixel
     /// [default: render.transmittance.lateral_texel_mm, 4].
     #[arg(long, value_name = "MM")]
     pub lateral_texel_mm: Option<f32>,

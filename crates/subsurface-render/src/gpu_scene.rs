@@ -522,9 +522,11 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
         uniform.bounce_ring = settings.bounce.ring;
         uniform.bounce_cell_mm = settings.bounce.cell_mm;
     }
-    uniform.bounce_layer = crate::passes::lighting::lateral_lights(&uniform)
-        .last()
-        .map_or(0, |&l| l + 1);
+    uniform.bounce_layer = if crate::passes::lighting::transmitted_map(&uniform) {
+        crate::passes::lighting::TRANSMITTED_LAYERS
+    } else {
+        0
+    };
     Ok(LightSetup {
         uniform,
         layers,

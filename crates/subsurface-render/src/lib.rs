@@ -73,16 +73,22 @@ mod shader_tests {
         .validate(&module)
         .unwrap();
         let codes = crate::TransmittanceMethod::ALL.map(|m| m.code());
-        for code in codes.into_iter().chain([255]) {
+        // Every method with every source of `diffusion` (lighting.rs, `lateral_source`).
+        let variants = codes
+            .into_iter()
+            .chain([255])
+            .flat_map(|code| [0, 1, 2, 255].map(|source| (code, source)));
+        for (code, source) in variants {
             let mut constants = naga::back::PipelineConstants::default();
             constants.insert("TRANSMITTANCE_METHOD".into(), f64::from(code));
-            for entry in ["fs_main", "fs_lateral", "fs_lateral_pair"] {
+            constants.insert("LATERAL_SOURCE".into(), f64::from(source));
+            for entry in ["fs_main", "fs_transmitted", "fs_bounce"] {
                 let stage = Some((naga::ShaderStage::Fragment, entry));
                 let (specialized, specialized_info) =
                     naga::back::pipeline_constants::process_overrides(
                         &module, &info, stage, &constants,
                     )
-                    .unwrap_or_else(|e| panic!("method {code}, {entry}: {e:?}"));
+                    .unwrap_or_else(|e| panic!("method {code}, source {source}, {entry}: {e:?}"));
                 let options = naga::back::spv::Options::default();
                 let pipeline = naga::back::spv::PipelineOptions {
                     shader_stage: naga::ShaderStage::Fragment,
@@ -94,7 +100,7 @@ mod shader_tests {
                     &options,
                     Some(&pipeline),
                 )
-                .unwrap_or_else(|e| panic!("method {code}, {entry}: {e:?}"));
+                .unwrap_or_else(|e| panic!("method {code}, source {source}, {entry}: {e:?}"));
             }
         }
     }

@@ -81,8 +81,8 @@ pub struct Renderer {
     far: f32,
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
-    /// The lights the lateral pass runs for (`lighting::lateral_lights`).
-    lateral_lights: Vec<u32>,
+    /// Whether the lateral pass evaluates the transmitted light (`lighting::transmitted_map`).
+    transmitted_map: bool,
     /// Each object's LUT key (`gpu_scene::lut_key`): a change re-uploads the objects.
     lut_keys: Vec<String>,
     /// The screen-space profile table and each object's row in it.
@@ -297,7 +297,7 @@ impl Renderer {
             options.height(),
             LateralShape::for_lights(&lights.uniform),
         );
-        let lateral_lights = lighting::lateral_lights(&lights.uniform);
+        let transmitted_map = lighting::transmitted_map(&lights.uniform);
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
         sss.resize(
@@ -332,7 +332,7 @@ impl Renderer {
             far: scene.desc.camera.far,
             light_kinds: kinds,
             shadow_signature: shadow_signature(&lights),
-            lateral_lights,
+            transmitted_map,
             lut_keys: gpu_scene::lut_keys(scene),
             profiles,
             maps_layout,
@@ -457,8 +457,7 @@ impl Renderer {
                 TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
             self.texture_signature = texture_signature;
         }
-        self.lateral_lights = lighting::lateral_lights(&lights.uniform);
-        self.lighting.prepare_lateral(&queue, &self.lateral_lights);
+        self.transmitted_map = lighting::transmitted_map(&lights.uniform);
         // New targets (and every binding of them) when the size changes; a new lateral map
         // alone when only its shape does (the camera moved the skin nearer or farther, a
         // shadowed light came or went).
@@ -557,7 +556,7 @@ impl Renderer {
             &self.targets,
             &self.objects,
             self.texture_space.bind_groups(),
-            &self.lateral_lights,
+            self.transmitted_map,
             self.background,
             self.far,
             p,

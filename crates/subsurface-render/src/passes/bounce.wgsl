@@ -129,7 +129,7 @@ fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 // The bounce at the lighting pass's pixel, interpolated from the lateral map's bounce layer
 // (fs_bounce): the bilinear 2 x 2 where all four texels lie on the pixel's surface (within
-// the tolerance of its plane, lateral_from_map's test). Elsewhere the 4 x 4 texels around the
+// the tolerance of its plane, transmitted_from_map's test). Elsewhere the 4 x 4 texels around the
 // pixel, weighted by a tent two texels wide, where their surface lies within a quarter of the
 // medium's decay length (at most 2.5 mm) of the pixel's own, extended as a plane, or within
 // four times that of the pixel's depth; else the one nearest in depth (below). Wider than the

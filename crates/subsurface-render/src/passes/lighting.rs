@@ -7,15 +7,16 @@
 //! and the per-pixel SSS strength.
 //!
 //! With `diffusion` and lateral taps, a lateral pass runs first: the meshes' front faces again
-//! at a reduced resolution ([`LateralTargets`], the reduction from `gpu_scene::lateral_downsample`), the
-//! lateral taps of two lights per pass into a map the lighting pass then interpolates
-//! (transmittance.wgsl, `lateral_from_map`); a lighting pipeline built for the map holds no
-//! taps of its own ([`lateral_source`]).
+//! at a reduced resolution ([`LateralTargets`], the reduction from
+//! `gpu_scene::lateral_downsample`), where `fs_transmitted` evaluates `diffusion`'s whole
+//! transmitted light, every light together, into a map the lighting pass then interpolates
+//! once per pixel (transmittance.wgsl, `transmitted_from_map`); a lighting pipeline built for
+//! the map holds no taps of its own ([`lateral_source`]).
 //!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
 //! maps ([`maps::maps_layout`]), group 3 the lateral map ([`screen_layout`]; the lateral pass
-//! binds its lights' indices there instead). The texture-space pass draws its UV-space
+//! has no group 3). The texture-space pass draws its UV-space
 //! irradiance with the same groups (`texture_space::irradiance`), group 3 being
 //! [`LightingPass::no_lateral_map`].
 
@@ -63,14 +64,15 @@ pub struct LightingTargets {
     screen: wgpu::BindGroup,
 }
 
-/// The lateral pass's targets: one layer per light index up to the last that the pass fills
-/// (and the bounce's after them, `bounce_layer`),
-/// of `LATERAL_FORMAT` at `ceil(size / downsample)`: rgb = the lateral taps' sum at the
-/// texel's surface, a = its view depth; a < 0: the light reaches that surface directly (-a its
-/// depth); a = 0: nothing there. And the z-buffer of that resolution.
+/// The lateral pass's targets, of `LATERAL_FORMAT` at `ceil(size / downsample)`: layers 0 and
+/// 1 ([`TRANSMITTED_LAYERS`]) hold `diffusion`'s transmitted light at the texel's surface, every
+/// light's radiance summed (0: the diffuse part, which joins the irradiance; 1: the unscattered
+/// and singly scattered part, which joins the specular target), a = the texel's view depth
+/// (0: nothing there); the bounce's layer comes after them (`bounce_layer`). And the z-buffer of
+/// that resolution.
 pub struct LateralTargets {
     pub downsample: u32,
-    /// Layers of `map`: the light indices below this have one.
+    /// Layers of `map`.
     pub layer_count: u32,
     pub width: u32,
     pub height: u32,
@@ -87,8 +89,8 @@ impl LateralTargets {
     pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32, layers: u32) -> Self {
         let device = &ctx.device;
         let downsample = downsample.max(1);
-        // One layer per light, and the bounce's after them.
-        let layer_count = layers.clamp(1, MAX_LIGHTS as u32 + 1);
+        // The transmitted light's two, and the bounce's after them.
+        let layer_count = layers.clamp(1, TRANSMITTED_LAYERS + 1);
         let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
         let map = util::texture_2d(
             device,
@@ -224,8 +226,8 @@ impl LightingTargets {
     }
 }
 
-/// What a lateral map is made of: its reduction (1: no map) and its layers (one per light
-/// index up to the last the lateral pass fills).
+/// What a lateral map is made of: its reduction (1: no map) and its layers (the transmitted
+/// light's, and the bounce's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LateralShape {
     pub downsample: u32,
@@ -238,12 +240,13 @@ impl LateralShape {
         layers: 0,
     };
 
-    /// For `lights` ([`lateral_lights`]; their uniform's `lateral_downsample`): none where no
-    /// light needs one.
+    /// For `lights` ([`transmitted_map`]; their uniform's `lateral_downsample`): none where
+    /// neither the transmitted light nor the bounce needs one.
     pub fn for_lights(lights: &LightsUniform) -> Self {
         let layers = match bounce_layer(lights) {
             Some(layer) => layer + 1,
-            None => lateral_lights(lights).last().map_or(0, |&last| last + 1),
+            None if transmitted_map(lights) => TRANSMITTED_LAYERS,
+            None => 0,
         };
         if layers == 0 {
             return Self::NONE;
@@ -273,40 +276,26 @@ fn lateral_targets(
     (lateral, screen)
 }
 
-/// The lights whose lateral light the lateral pass computes for `lights`: `diffusion` with
-/// taps and a lateral map, each light with a shadow map (the others transmit nothing).
-pub fn lateral_lights(lights: &LightsUniform) -> Vec<u32> {
+/// The layers of the lateral map that hold `diffusion`'s transmitted light (0 diffuse, 1
+/// unscattered and singly scattered); the bounce's layer, if any, follows them.
+pub const TRANSMITTED_LAYERS: u32 = 2;
+
+/// Whether the lateral pass evaluates `diffusion`'s transmitted light for `lights` into the
+/// lateral map: `diffusion` with taps and a map, and a light with a shadow map (the others
+/// transmit nothing).
+pub fn transmitted_map(lights: &LightsUniform) -> bool {
     let diffusion = crate::settings::TransmittanceMethod::Diffusion.code();
-    if lights.transmittance != diffusion
-        || lights.lateral_taps == 0
-        || lights.lateral_downsample <= 1
-    {
-        return Vec::new();
-    }
-    (0..lights.count.min(MAX_LIGHTS as u32))
-        .filter(|&i| lights.lights[i as usize].first_layer >= 0.0)
-        .collect()
+    lights.transmittance == diffusion
+        && lights.lateral_taps > 0
+        && lights.lateral_downsample > 1
+        && (0..lights.count.min(MAX_LIGHTS as u32))
+            .any(|i| lights.lights[i as usize].first_layer >= 0.0)
 }
 
 /// The lateral map's layer that the bounce pass fills for `lights` (`bounce_layer`, after the
-/// lateral lights' layers), if the bounce is gathered on the map.
+/// transmitted light's layers), if the bounce is gathered on the map.
 pub fn bounce_layer(lights: &LightsUniform) -> Option<u32> {
     (lights.bounce_ring > 0 && lights.lateral_downsample > 1).then_some(lights.bounce_layer)
-}
-
-/// The lateral pass's light indices, one pair per `LATERAL_STRIDE` bytes (a dynamic offset).
-const LATERAL_STRIDE: u64 = 256;
-
-/// `LateralLights` of lighting.wgsl for each pass over `lights`, two lights a pass.
-fn lateral_index_bytes(lights: &[u32]) -> Vec<u8> {
-    let mut bytes = vec![0u8; MAX_LIGHTS * LATERAL_STRIDE as usize];
-    for (k, pair) in lights.chunks(2).take(MAX_LIGHTS).enumerate() {
-        for (j, &l) in pair.iter().enumerate() {
-            let at = k * LATERAL_STRIDE as usize + 4 * j;
-            bytes[at..at + 4].copy_from_slice(&l.to_le_bytes());
-        }
-    }
-    bytes
 }
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
@@ -372,14 +361,12 @@ pub struct ShadowMaps<'a> {
 }
 
 /// One pass over the lateral map: `pipeline` into its `layers`, timed as `timed`, the first
-/// of a frame clearing the map's z-buffer (the later ones shade only the surfaces it kept),
-/// with the light indices at `offset` of group 3.
+/// of a frame clearing the map's z-buffer (the later ones shade only the surfaces it kept).
 struct MapPass<'a> {
     timed: &'static str,
     layers: &'a [u32],
     first: bool,
     pipeline: &'a wgpu::RenderPipeline,
-    offset: u32,
 }
 
 /// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
@@ -404,10 +391,12 @@ pub fn bounce_source(lights: &LightsUniform) -> u32 {
 /// (transmittance.wgsl, `LATERAL_SOURCE`).
 const LATERAL_CONSTANT: &str = "LATERAL_SOURCE";
 
-/// Where the lighting pass takes `diffusion`'s lateral light from for `lights`: 0 nowhere
-/// (another method, or no taps), 1 the lateral map alone, 2 the taps at every pixel (no map;
-/// with a map, the variant [`LightingPass::set_taps_objects`] draws skin too far for it with).
-/// A pipeline per source, so that the map's holds no tap loop.
+/// Where the lighting pass takes `diffusion` from for `lights`: 0 per pixel without lateral
+/// light (another method, or no taps), 1 the transmitted map (every light's transmitted light
+/// in one read; the lights' chords per pixel only where the map has no texel of the pixel's
+/// surface), 2 per pixel with the taps (no map; with a map, the variant
+/// [`LightingPass::set_taps_objects`] draws skin too far for it with). A pipeline per source,
+/// so that the map's holds no tap loop.
 pub fn lateral_source(lights: &LightsUniform) -> u32 {
     let diffusion = crate::settings::TransmittanceMethod::Diffusion.code();
     if lights.transmittance != diffusion || lights.lateral_taps == 0 {
@@ -482,17 +471,13 @@ pub struct LightingPass {
     taps_objects: Vec<bool>,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    /// `[first pass, later passes][one light, two lights]`: `fs_lateral` into one layer of the
-    /// lateral map, `fs_lateral_pair` into two (group 3: the lights' indices, one pair per
-    /// [`LATERAL_STRIDE`] of the buffer). The first pass keeps the nearest surface, the later
-    /// ones shade only it.
-    lateral: [[wgpu::RenderPipeline; 2]; 2],
+    /// `fs_transmitted` into the transmitted light's two layers of the lateral map, keeping
+    /// the nearest surface in the map's z-buffer (the bounce pass after it shades only that).
+    lateral: wgpu::RenderPipeline,
     /// `[first pass, later passes]`: `fs_bounce` into the map's bounce layer.
     bounce: [wgpu::RenderPipeline; 2],
     /// The lateral map's layer the bounce is gathered into ([`bounce_layer`]), if any.
     bounce_layer: Option<u32>,
-    lateral_lights: wgpu::BindGroup,
-    lateral_indices: wgpu::Buffer,
     /// Group 3 for pipelines that take the screen layout but never read the map.
     no_lateral_map: wgpu::BindGroup,
     frame_bind_group: wgpu::BindGroup,
@@ -546,7 +531,6 @@ impl LightingPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let lateral_bytes = lateral_index_bytes(&lateral_lights(lights));
         let bounce_layer = bounce_layer(lights);
         let key = LightingVariant::for_lights(lights);
         let no_flux = crate::passes::bounce::dummy_views(device);
@@ -622,41 +606,10 @@ impl LightingPass {
                 &screen_layout(device),
             ],
         );
-        let lateral_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lateral light"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(16),
-                },
-                count: None,
-            }],
-        });
-        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lateral light indices"),
-            contents: &lateral_bytes,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
-        let lateral_lights = util::bind_group(
-            device,
-            "lateral light",
-            &lateral_layout,
-            [(
-                1,
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &index_buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(16),
-                }),
-            )],
-        );
         let lateral_pipeline_layout = util::pipeline_layout(
             device,
             "lateral",
-            &[&frame_layout, object_layout, maps_layout, &lateral_layout],
+            &[&frame_layout, object_layout, maps_layout],
         );
         // Back faces culled, so no depth pre-pass is needed to run the taps about once a texel
         // (the lighting pass draws both sides, for open meshes: a pixel whose back face shows
@@ -665,10 +618,14 @@ impl LightingPass {
         // Against a pre-pass and both sides, interleaved at 1280x720: the pass 17 ms instead
         // of 22, the lighting pass unchanged (docs/performance.md).
         // Only `diffusion` reads the lateral map.
-        let diffusion = [(
-            METHOD_CONSTANT,
-            f64::from(TransmittanceMethod::Diffusion.code()),
-        )];
+        // Each texel evaluates `diffusion` whole, the lateral taps included (LATERAL_SOURCE 2).
+        let diffusion = [
+            (
+                METHOD_CONSTANT,
+                f64::from(TransmittanceMethod::Diffusion.code()),
+            ),
+            (LATERAL_CONSTANT, 2.0),
+        ];
         let lateral_pipeline = |fragment, targets, depth| {
             util::MeshPipeline {
                 label: "lateral",
@@ -684,12 +641,7 @@ impl LightingPass {
             .create(device)
         };
         let pair: &[wgpu::TextureFormat] = &[LATERAL_FORMAT, LATERAL_FORMAT];
-        let lateral = [util::DepthTest::Nearest, util::DepthTest::Prepassed].map(|depth| {
-            [
-                lateral_pipeline("fs_lateral", &[LATERAL_FORMAT], depth),
-                lateral_pipeline("fs_lateral_pair", pair, depth),
-            ]
-        });
+        let lateral = lateral_pipeline("fs_transmitted", pair, util::DepthTest::Nearest);
         let bounce = [util::DepthTest::Nearest, util::DepthTest::Prepassed]
             .map(|depth| lateral_pipeline("fs_bounce", &[LATERAL_FORMAT], depth));
         let pipeline = lighting_pipeline(device, &layout, &module, key);
@@ -709,8 +661,6 @@ impl LightingPass {
             lateral,
             bounce,
             bounce_layer,
-            lateral_lights,
-            lateral_indices: index_buffer,
             no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
             default_maps,
             frame_bind_group,
@@ -737,7 +687,6 @@ impl LightingPass {
             .write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
         ctx.queue
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
-        self.prepare_lateral(&ctx.queue, &lateral_lights(lights));
         self.bounce_layer = bounce_layer(lights);
         self.specialize(&ctx.device, LightingVariant::for_lights(lights));
     }
@@ -776,12 +725,6 @@ impl LightingPass {
         self.taps = (key.lateral == 1 && objects.contains(&true))
             .then(|| self.pipeline_index(device, LightingVariant { lateral: 2, ..key }));
         self.taps_objects = objects;
-    }
-
-    /// Writes the lateral pass's light indices for `lights` ([`lateral_lights`]), two per
-    /// pass in the order `encode` draws them.
-    pub fn prepare_lateral(&self, queue: &wgpu::Queue, lights: &[u32]) {
-        queue.write_buffer(&self.lateral_indices, 0, &lateral_index_bytes(lights));
     }
 
     /// Draws every object with `pipeline` and the pass's groups (the depth pre-pass and the
@@ -825,15 +768,16 @@ impl LightingPass {
         }
     }
 
-    /// `lateral_lights` are the lights the lateral pass fills the lateral map for
-    /// ([`lateral_lights`] of the uniform given to [`Self::prepare`]); ignored without a map.
+    /// `transmitted`: the lateral pass evaluates `diffusion`'s transmitted light into the
+    /// lateral map first ([`transmitted_map`] of the uniform given to [`Self::prepare`]);
+    /// ignored without a map.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &LightingTargets,
         objects: &[GpuObject],
-        lateral_lights: &[u32],
+        transmitted: bool,
         background: [f32; 3],
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
@@ -843,7 +787,7 @@ impl LightingPass {
             targets,
             objects,
             &[],
-            lateral_lights,
+            transmitted,
             background,
             far,
             profiler,
@@ -880,44 +824,35 @@ impl LightingPass {
         timer.end(profiler, encoder);
     }
 
-    /// The lateral pass (timed "lateral"): `fs_lateral_pair` into two of `lights`' layers at
-    /// a time (`fs_lateral` for an odd one), the first pass writing the map's z-buffer and the
-    /// others testing against it; then the bounce pass (timed "bounce", `fs_bounce`) into
-    /// the bounce layer.
+    /// The lateral pass (timed "lateral"): `fs_transmitted` into the transmitted light's
+    /// layers where `transmitted`, writing the map's z-buffer; then the bounce pass (timed
+    /// "bounce", `fs_bounce`) into the bounce layer, testing against it.
     fn encode_lateral(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         lateral: &LateralTargets,
         objects: &[GpuObject],
         maps: &[wgpu::BindGroup],
-        lights: &[u32],
+        transmitted: bool,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        // Pairs in the order `prepare_lateral` wrote their indices (pair k at offset k); a pair
-        // naming a light the map has no layer for is left out.
         let mut first = true;
-        for (k, pair) in lights.chunks(2).enumerate() {
-            if pair.iter().any(|&l| l >= lateral.layer_count) {
-                continue;
-            }
+        if transmitted && lateral.layer_count >= TRANSMITTED_LAYERS {
             let pass = MapPass {
                 timed: "lateral",
-                layers: pair,
+                layers: &[0, 1],
                 first,
-                pipeline: &self.lateral[usize::from(!first)][pair.len() - 1],
-                offset: (k as u64 * LATERAL_STRIDE) as u32,
+                pipeline: &self.lateral,
             };
             self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
             first = false;
         }
         if let Some(layer) = self.bounce_layer.filter(|&l| l < lateral.layer_count) {
-            // fs_bounce reads no light index, but the layout has the group.
             let pass = MapPass {
                 timed: "bounce",
                 layers: &[layer],
                 first,
                 pipeline: &self.bounce[usize::from(!first)],
-                offset: 0,
             };
             self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
         }
@@ -962,7 +897,6 @@ impl LightingPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(3, &self.lateral_lights, &[map_pass.offset]);
             self.draw_objects(&mut pass, map_pass.pipeline, objects, maps);
         }
         timer.end(profiler, encoder);
@@ -977,15 +911,15 @@ impl LightingPass {
         targets: &LightingTargets,
         objects: &[GpuObject],
         maps: &[wgpu::BindGroup],
-        lateral_lights: &[u32],
+        transmitted: bool,
         background: [f32; 3],
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
         if let Some(lateral) = &targets.lateral
-            && (!lateral_lights.is_empty() || self.bounce_layer.is_some())
+            && (transmitted || self.bounce_layer.is_some())
         {
-            self.encode_lateral(encoder, lateral, objects, maps, lateral_lights, profiler);
+            self.encode_lateral(encoder, lateral, objects, maps, transmitted, profiler);
         }
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (diffuse, specular, depth, sss) = (
@@ -1063,5 +997,39 @@ mod tests {
         lights.lateral_taps = 12;
         lights.transmittance = TransmittanceMethod::Paper.code();
         assert_eq!(lateral_source(&lights), 0);
+    }
+
+    /// The lateral pass evaluates the transmitted light only for `diffusion` with taps, a map
+    /// and a shadowed light, into two layers before the bounce's.
+    #[test]
+    fn the_transmitted_light_takes_two_layers_before_the_bounce() {
+        let mut lights: LightsUniform = bytemuck::Zeroable::zeroed();
+        lights.transmittance = TransmittanceMethod::Diffusion.code();
+        lights.lateral_taps = 12;
+        lights.lateral_downsample = 4;
+        lights.count = 2;
+        lights.lights[0].first_layer = -1.0;
+        lights.lights[1].first_layer = -1.0;
+        assert!(!transmitted_map(&lights), "no light has a shadow map");
+        assert_eq!(LateralShape::for_lights(&lights), LateralShape::NONE);
+        lights.lights[1].first_layer = 0.0;
+        assert!(transmitted_map(&lights));
+        let shape = LateralShape::for_lights(&lights);
+        assert_eq!((shape.downsample, shape.layers), (4, TRANSMITTED_LAYERS));
+        lights.bounce_ring = 2;
+        lights.bounce_layer = TRANSMITTED_LAYERS;
+        assert_eq!(
+            LateralShape::for_lights(&lights).layers,
+            TRANSMITTED_LAYERS + 1
+        );
+        for off in [
+            |l: &mut LightsUniform| l.lateral_taps = 0,
+            |l: &mut LightsUniform| l.lateral_downsample = 1,
+            |l: &mut LightsUniform| l.transmittance = TransmittanceMethod::Paper.code(),
+        ] {
+            let mut other = lights;
+            off(&mut other);
+            assert!(!transmitted_map(&other));
+        }
     }
 }

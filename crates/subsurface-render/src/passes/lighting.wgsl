@@ -18,8 +18,7 @@ struct LitVarying {
     @location(3) tangent: vec4<f32>,
 };
 
-@vertex
-fn vs_main(v: VertexIn) -> LitVarying {
+fn lit_varying(v: VertexIn) -> LitVarying {
     var out: LitVarying;
     let world = world_position(v);
     out.world = world.xyz;
@@ -28,6 +27,11 @@ fn vs_main(v: VertexIn) -> LitVarying {
     out.tangent = world_tangent(v);
     out.uv = v.uv;
     return out;
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> LitVarying {
+    return lit_varying(v);
 }
 
 // Largest finite half float: what the Rgba16Float radiance targets can hold.
@@ -116,56 +120,15 @@ struct TextureSpace {
 // layer (-1 where nothing was drawn).
 @group(0) @binding(3) var tsm_atlas: texture_2d_array<f32>;
 
-// `diffusion`'s lateral light at reduced resolution (lighting.rs, `LateralTargets`): one layer
-// per light, rgb = lateral_transmittance at the texel's surface, a = its view depth; a < 0:
-// the light reaches that surface directly (-a its depth), a = 0: nothing there. Group 3 of the lighting pass; the lateral pass binds `lateral_lights` there instead.
+// `diffusion`'s transmitted light at reduced resolution (lighting.rs, `LateralTargets`):
+// layer 0 its diffuse part, layer 1 its unscattered and singly scattered part, every light's
+// radiance summed, a = the texel's view depth (0: nothing there); the bounce's layer after
+// them. Group 3 of the lighting pass; the lateral and bounce passes have no group 3.
 @group(3) @binding(0) var lateral_map: texture_2d_array<f32>;
-
-// The lights one lateral pass fills: `first` into target 0 and, with fs_lateral_pair, `second`
-// into target 1 (two Rgba32Float targets are the 32 bytes per sample every adapter allows).
-struct LateralLights {
-    first: u32,
-    second: u32,
-    _pad0: u32,
-    _pad1: u32,
-};
-@group(3) @binding(1) var<uniform> lateral_lights: LateralLights;
-
-// One lateral-map texel for light `index` at the fragment `in` (see fs_lateral).
-fn lateral_texel(index: u32, in: LitVarying, n_vertex: vec3<f32>) -> vec4<f32> {
-    let none = vec4<f32>(0.0);
-    if (object.lateral_decay <= 0.0) {
-        return none;
-    }
-    let light = lights.lights[index];
-    let l = light_direction(light.kind, light.position, light.direction, in.world);
-    let depth = dot(in.world - camera.position, camera.forward);
-    // Where the light reaches a surface facing it, `transmittance` exits early: the texel says
-    // so (a negative depth) rather than run the taps, and a pixel there that shadow-map acne
-    // leaves partly unlit reads it as no lateral light (lateral_from_map).
-    if (dot(n_vertex, l) > 0.0 && shadow_factor(light, in.world) >= 1.0) {
-        return vec4<f32>(0.0, 0.0, 0.0, -depth);
-    }
-    let entry = light_entry(light, in.world, n_vertex);
-    if (entry.s_mm < 0.0 || dot(entry.normal, entry.normal) <= 0.5) {
-        return none;
-    }
-    return vec4<f32>(lateral_transmittance(light, in.world, n_vertex, l, entry.s_mm), depth);
-}
 
 fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
     let n = normalize(in.normal);
     return select(-n, n, front);
-}
-
-// The lateral pass: the lateral taps of one light (`lateral_lights.first`) at each texel of the
-// reduced-resolution map. The taps gather light that entered the lit surface millimetres to
-// centimetres away, so their sum changes over the medium's decay length, not from pixel to
-// pixel: a texel of a few millimetres serves a block of pixels, and the lighting pass
-// interpolates it instead of running twelve shadow-map projections and loads per pixel.
-@fragment
-fn fs_lateral(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    return lateral_texel(lateral_lights.first, in, oriented_normal(in, front));
 }
 
 struct LateralPair {
@@ -173,14 +136,39 @@ struct LateralPair {
     @location(1) second: vec4<f32>,
 };
 
-// Two lights in one pass: the mesh is drawn once for both.
+// The lateral pass: `diffusion`'s whole transmitted light, every light together, at each
+// texel of the reduced-resolution map (layer 0 the diffuse part, which joins the irradiance;
+// layer 1 the unscattered and singly scattered part, which joins the specular target;
+// a = the texel's view depth). What crosses skin changes over the medium's decay length, not
+// from pixel to pixel (the diffuse part is blurred by the profile after this anyway), so a
+// texel of a few millimetres serves a block of pixels, and the lighting pass reads one
+// interpolated value per pixel instead of running each light's thickness, LUT reads, taps
+// and single-scattering march. With the lateral taps alone in the map, `diffusion` cost
+// +65 % of `paper`'s lighting pass on an H100 at 1920x1080; with everything, +22 %
+// (docs/performance.md).
 @fragment
-fn fs_lateral_pair(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
+fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
     let n_vertex = oriented_normal(in, front);
-    return LateralPair(
-        lateral_texel(lateral_lights.first, in, n_vertex),
-        lateral_texel(lateral_lights.second, in, n_vertex),
-    );
+    let depth = dot(in.world - camera.position, camera.forward);
+    let v = normalize(camera.position - in.world);
+    var diffuse = vec3<f32>(0.0);
+    var ballistic = vec3<f32>(0.0);
+    let count = min(lights.count, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.lights[i];
+        if (light.first_layer < 0.0) {
+            continue;
+        }
+        let l = light_direction(light.kind, light.position, light.direction, in.world);
+        let radiance = light_radiance(light, in.world, l);
+        if (all(radiance <= vec3<f32>(0.0))) {
+            continue;
+        }
+        let t = transmittance(light, in.world, n_vertex, l, v, shadow_factor(light, in.world));
+        diffuse += radiance * t.diffuse;
+        ballistic += radiance * t.ballistic;
+    }
+    return LateralPair(vec4<f32>(diffuse, depth), vec4<f32>(ballistic, depth));
 }
 
 // The bounce pass (passes::bounce): the light the lit surfaces send each texel's surface
@@ -231,10 +219,28 @@ struct Shading {
     specular: vec3<f32>,
 };
 
+// The radiance `light` sends toward `world` (direction `l` to the light): its colour, the
+// inverse square of its distance, its spot cone.
+fn light_radiance(light: Light, world: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    var attenuation = 1.0;
+    if (light.kind != KIND_DIRECTIONAL) {
+        let to_light = light.position - world;
+        attenuation = 1.0 / max(dot(to_light, to_light), 1e-8);
+    }
+    var spot = 1.0;
+    if (light.kind == KIND_SPOT) {
+        spot = smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
+    }
+    // Saturate before the spot factor: a light bright enough to overflow f32 at this
+    // distance would otherwise turn inf x 0 into NaN outside its cone (black pixels);
+    // the half-float targets cannot hold more anyway.
+    return min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
+}
+
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
-// `screen`: where `world` is the pixel's surface, `diffusion` may read its lateral light from
-// the lateral map (transmittance.wgsl, lateral_from_map).
+// `screen`: where `world` is the pixel's surface, `diffusion` may read its transmitted light
+// from the lateral map (transmittance.wgsl, transmitted_from_map).
 fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool, screen: ScreenSample) -> Shading {
     var s: Shading;
     s.irradiance = vec3<f32>(0.0);
@@ -244,22 +250,22 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     let count = min(lights.count, MAX_LIGHTS);
     // Translucent shadow maps are method 4's: a pipeline built for another leaves them out.
     let tsm = with_tsm && (TRANSMITTANCE_METHOD == 255u || TRANSMITTANCE_METHOD == 4u);
+    // `diffusion` from the lateral map: where the map holds the pixel's surface, one read
+    // serves every light. Where it does not (an outline, whose outer pixels no texel centre
+    // covers; a depth edge), each light's chord runs here (`transmittance`, without taps) and
+    // the diffuse part becomes the larger of their sum and the nearest texel's: the grazing
+    // view and the thin rim make an outline's transmitted light change within a texel, and the
+    // nearest texel alone, lying further in, left the finger's light-side outline at -27 %
+    // against the path tracer instead of -17 % (docs/fidelity.md, finding 14).
+    let from_map = TRANSMITTANCE_METHOD == 5u && LATERAL_SOURCE == 1u;
+    var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
+    if (from_map) {
+        mapped = transmitted_from_map(screen);
+    }
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.kind, light.position, light.direction, world);
-        var attenuation = 1.0;
-        if (light.kind != KIND_DIRECTIONAL) {
-            let to_light = light.position - world;
-            attenuation = 1.0 / max(dot(to_light, to_light), 1e-8);
-        }
-        var spot = 1.0;
-        if (light.kind == KIND_SPOT) {
-            spot = smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
-        }
-        // Saturate before the spot factor: a light bright enough to overflow f32 at this
-        // distance would otherwise turn inf x 0 into NaN outside its cone (black pixels);
-        // the half-float targets cannot hold more anyway.
-        let radiance = min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
+        let radiance = light_radiance(light, world, l);
         let dark = all(radiance <= vec3<f32>(0.0));
         if (dark && !tsm) {
             continue;
@@ -274,9 +280,20 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             continue;
         }
         s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
-        let t = transmittance(light, i, world, n_vertex, l, v, shadow, screen);
-        s.transmitted += radiance * t.diffuse;
-        s.specular += radiance * (shadow * boundary_specular(n, l, v, m, rho_s) + t.ballistic);
+        s.specular += radiance * shadow * boundary_specular(n, l, v, m, rho_s);
+        if (!mapped.on_surface) {
+            let t = transmittance(light, world, n_vertex, l, v, shadow);
+            s.transmitted += radiance * t.diffuse;
+            s.specular += radiance * t.ballistic;
+        }
+    }
+    if (from_map) {
+        if (mapped.on_surface) {
+            s.transmitted += mapped.t.diffuse;
+            s.specular += mapped.t.ballistic;
+        } else {
+            s.transmitted = max(s.transmitted, mapped.t.diffuse);
+        }
     }
     return s;
 }
@@ -307,7 +324,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     // In uniform control flow: the derivatives extend the pixel's surface to the lateral map's
     // texels around it.
     let depth = dot(in.world - camera.position, camera.forward);
-    let screen = ScreenSample(true, in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));
+    let screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));
     let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5, screen);
 
     var out: GBuffer;
@@ -335,3 +352,4 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), 0.0);
     return out;
 }
+

@@ -9,13 +9,15 @@
 // 117 ms against 77 specialized; on GPUs the unused branches still cost registers).
 override TRANSMITTANCE_METHOD: u32 = 255u;
 
-// Where this pipeline's `diffusion` takes its lateral light from (lighting.rs,
-// `lateral_source`): 0 nowhere (another method, or no taps), 1 the lateral map alone, 2 the
-// taps at the pixel (no map, or skin too far for the map's texels: the renderer draws it with
-// this variant, gpu_scene.rs `lateral_taps_objects`), 255 the map where `screen.from_map` and
-// one exists, else the taps (the texture-space pass). A pipeline per source, as for the
-// method: the map's pipeline holds no tap loop, which llvmpipe runs for every pixel once any
-// pixel needs it (7 of the lighting pass's 117 ms at 640x360) and a GPU pays for in registers.
+// Where this pipeline's `diffusion` comes from (lighting.rs, `lateral_source`): 0 per point
+// without lateral light (another method, or no taps), 1 the lateral map (shade reads every
+// light's transmitted light there at once, and runs the chords here, without taps, where the
+// map has no texel of the pixel's surface), 2 per point with the taps (no map, skin too far for the map's texels:
+// the renderer draws it with this variant, gpu_scene.rs `lateral_taps_objects`, and the
+// lateral pass itself), 255 per point with the taps (the texture-space pass). A pipeline per
+// source, as for the method: the map's pipeline holds no tap loop, which llvmpipe runs for
+// every pixel once any pixel needs it (7 of the lighting pass's 117 ms at 640x360) and a GPU
+// pays for in registers.
 override LATERAL_SOURCE: u32 = 255u;
 
 fn transmittance_method() -> u32 {
@@ -261,6 +263,17 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
 // light over most of a head for nothing (the five-light head on lavapipe: without this bound
 // the march alone added 35 % to the frame; with it, all of `diffusion` adds 6-8 %).
 const SCATTER_STEPS: i32 = 8;
+// The lighting pipeline that reads the lateral map runs `transmittance` only at the pixels the
+// map has no texel for (an outline; shade in lighting.wgsl), with this many steps: the code a
+// shader holds costs registers at every pixel of that pipeline on an H100, taken or not
+// (1920x1080, the default scene: its lighting pass 2.80 ms with eight steps, 2.71 with four,
+// `paper`'s 2.55), for 0.8 point on the finger's outline against the path tracer
+// (docs/performance.md). The thickness stays the N x N average there: a single texel saved
+// another 0.14 ms but made lavapipe keep 12 MB per build of the pipeline (the viewer's soak
+// test grew 18 % in ten cycles).
+const OUTLINE_SCATTER_STEPS: i32 = 4;
+// An override, so that each pipeline's march has a constant trip count.
+override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == 1u);
 const SCATTER_RANGE_MM: f32 = 8.0;
 
 fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>, s_mm: f32) -> vec3<f32> {
@@ -271,9 +284,9 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
         return vec3<f32>(0.0);
     }
     let units_per_mm = object.world_per_mm * object.translucency;
-    let step_mm = s_mm / f32(SCATTER_STEPS);
+    let step_mm = s_mm / f32(MARCH_STEPS);
     var sum = vec3<f32>(0.0);
-    for (var k = 0; k < SCATTER_STEPS; k++) {
+    for (var k = 0; k < MARCH_STEPS; k++) {
         let t = (f32(k) + 0.5) * step_mm;
         let q = p + r * (t * units_per_mm);
         let sc = shadow_coord(light, q);
@@ -372,7 +385,7 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
 // agree, and a sheet in front of another (tests/transmittance.rs: without the test the front
 // one's pixels beside the edge took the back one's light), a finger in front of a palm, or a
 // curved rim where the plane leaves the surface within a texel takes the texel nearest its
-// depth instead (lateral_from_map).
+// depth instead (transmitted_from_map).
 const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
 // Below this share of the bilinear weight on the pixel's own surface, the pixel takes the
 // texel of the 4 x 4 around it nearest its depth rather than blend texels of other surfaces.
@@ -380,12 +393,9 @@ const LATERAL_MIN_WEIGHT: f32 = 0.3;
 // How far in depth, in depth tolerances, the nearest texel of a silhouette pixel may lie.
 const LATERAL_NEAREST_TOLERANCES: f32 = 16.0;
 
-// The pixel the lighting pass shades, for reading `diffusion`'s lateral light from the map:
-// its centre in pixels, its view depth and that depth's change per pixel across the surface.
-// `from_map` false (the texture-space pass, whose fragments are texels of a UV map) runs the
-// taps at the point itself.
+// The pixel the lighting pass shades, for reading `diffusion` and the bounce from the map: its
+// centre in pixels, its view depth and that depth's change per pixel across the surface.
 struct ScreenSample {
-    from_map: bool,
     xy: vec2<f32>,
     depth: f32,
     gradient: vec2<f32>,
@@ -399,63 +409,64 @@ fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 
     return screen.depth + dot(screen.gradient, centre - screen.xy);
 }
 
-// `diffusion`'s lateral light at `screen`'s pixel for light `layer`, interpolated from the
-// lateral map that the lateral pass filled at 1/N resolution (fs_lateral in lighting.wgsl).
+// What the lighting pass's pixel reads from the lateral map: every light's transmitted light,
+// and whether it came from texels of the pixel's own surface.
+struct MapRead {
+    t: Transmitted,
+    on_surface: bool,
+};
+
+// `diffusion`'s transmitted light at `screen`'s pixel, every light's together, interpolated
+// from the map the lateral pass filled at 1/N resolution (fs_transmitted in lighting.wgsl).
 // The four map texels around the pixel count with their bilinear weights where their surface
 // lies within the tolerance of the pixel's, extended as a plane to the texel's centre (so a
-// slanted surface keeps its texels and a depth edge loses them). Texels the light reaches
-// directly hold no taps: on a surface facing the light (`facing`), where only acne or a
-// penumbra leaves the pixel partly unlit, they count as no lateral light; behind it (a rim
-// past the terminator) they are left out. Where the four carry too little of the weight (a
-// silhouette, a depth edge) the nearest texel in depth serves (below); where none of the
-// 4 x 4 lies on the pixel's surface (a back face of an open mesh, which the lateral pass
-// culls) there is no lateral light, and the chord's slab alone serves.
+// slanted surface keeps its texels and a depth edge loses them). Where they carry too little
+// of the weight (a silhouette, a depth edge) the texel of the 4 x 4 around the pixel nearest
+// its depth serves (its diffuse part), marked as not on the pixel's surface (shade then runs
+// the chords there);
+// where none of the 4 x 4 lies near the pixel's depth (a back face of an open mesh, which the
+// lateral pass culls) it is zero, and the chords alone serve.
 // The renderer sizes the map for the nearest skin (`lateral_texel_mm` there); skin whose
 // texels come out more than `MAX_TEXEL_FACTOR` times coarser is drawn with a pipeline that
-// gathers the taps itself (LATERAL_SOURCE 2), so this one need not hold them.
-fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec3<f32> {
+// evaluates everything per pixel (LATERAL_SOURCE 2).
+fn transmitted_from_map(screen: ScreenSample) -> MapRead {
+    var out: Transmitted;
+    out.diffuse = vec3<f32>(0.0);
+    out.ballistic = vec3<f32>(0.0);
+    if (object.translucency <= 0.0) {
+        return MapRead(out, true);
+    }
     let units_per_mm = object.world_per_mm * object.translucency;
     let size = vec2<i32>(textureDimensions(lateral_map));
-    // The map renders the same projection into fewer pixels: texel centres at (i + 0.5) / scale.
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
     let pos = screen.xy * scale - 0.5;
     let base = vec2<i32>(floor(pos));
     let f = pos - floor(pos);
     let tolerance = LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 1e-3) * units_per_mm;
-    var sum = vec3<f32>(0.0);
     var weight = 0.0;
-    var lit_weight = 0.0;
     for (var j = 0; j < 2; j++) {
         for (var i = 0; i < 2; i++) {
             let texel = base + vec2<i32>(i, j);
             if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
                 continue;
             }
-            let t = textureLoad(lateral_map, texel, layer, 0);
+            let d = textureLoad(lateral_map, texel, 0, 0);
             let expected = plane_depth(screen, texel, scale);
             let w = select(1.0 - f.x, f.x, i == 1) * select(1.0 - f.y, f.y, j == 1);
-            if (t.w == 0.0 || abs(abs(t.w) - expected) > tolerance) {
+            if (d.w <= 0.0 || abs(d.w - expected) > tolerance) {
                 continue;
             }
-            if (t.w > 0.0) {
-                sum += t.rgb * w;
-                weight += w;
-            } else {
-                lit_weight += w;
-            }
+            out.diffuse += d.rgb * w;
+            out.ballistic += textureLoad(lateral_map, texel, 1, 0).rgb * w;
+            weight += w;
         }
     }
     if (weight >= LATERAL_MIN_WEIGHT) {
-        return sum / weight;
+        out.diffuse /= weight;
+        out.ballistic /= weight;
+        return MapRead(out, true);
     }
-    if (facing && weight + lit_weight >= LATERAL_MIN_WEIGHT) {
-        return sum / (weight + lit_weight);
-    }
-    // A silhouette or a depth edge: the texel of the 4 x 4 around the pixel nearest its depth
-    // (lit ones only on a surface facing the light), as the bounce's read does. Gathering the
-    // taps per pixel here instead was 0.8 of the 2.0 ms `diffusion` added to the lighting
-    // pass at 1920x1080 on an H200: a GPU runs a branch for all 32 pixels of a warp once one
-    // of them takes it, and such pixels line every outline (docs/performance.md).
+    // Only the diffuse part: the pixel runs its own unscattered and singly scattered light.
     var nearest = vec4<f32>(0.0, 0.0, 0.0, LATERAL_NEAREST_TOLERANCES * tolerance);
     for (var j = -1; j < 3; j++) {
         for (var i = -1; i < 3; i++) {
@@ -463,15 +474,14 @@ fn lateral_from_map(layer: u32, screen: ScreenSample, facing: bool) -> vec3<f32>
             if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
                 continue;
             }
-            let t = textureLoad(lateral_map, texel, layer, 0);
-            let gap = abs(abs(t.w) - screen.depth);
-            if (t.w == 0.0 || (t.w < 0.0 && !facing) || gap >= nearest.w) {
-                continue;
+            let d = textureLoad(lateral_map, texel, 0, 0);
+            let gap = abs(d.w - screen.depth);
+            if (d.w > 0.0 && gap < nearest.w) {
+                nearest = vec4<f32>(d.rgb, gap);
             }
-            nearest = vec4<f32>(select(t.rgb, vec3<f32>(0.0), t.w < 0.0), gap);
         }
     }
-    return nearest.rgb;
+    return MapRead(Transmitted(nearest.rgb, vec3<f32>(0.0)), false);
 }
 
 struct Transmitted {
@@ -480,10 +490,8 @@ struct Transmitted {
 };
 
 // `lit` is the light's shadow factor at p (1 = the light reaches p directly); v points to the
-// camera. `index` is the light's; where `screen.from_map` (the lighting pass: p is the pixel's
-// surface) `diffusion` reads its lateral light from the lateral map when there is one.
-// Returns factors of the light's radiance.
-fn transmittance(light: Light, index: u32, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, v: vec3<f32>, lit: f32, screen: ScreenSample) -> Transmitted {
+// camera. Returns factors of the light's radiance.
+fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, v: vec3<f32>, lit: f32) -> Transmitted {
     var out: Transmitted;
     out.diffuse = vec3<f32>(0.0);
     out.ballistic = vec3<f32>(0.0);
@@ -552,15 +560,10 @@ fn transmittance(light: Light, index: u32, p: vec3<f32>, n_vertex: vec3<f32>, l:
                 // medium keeps the light in (a finger, a wedge), the lateral one where light
                 // finds a shorter way than the chord (a palm beside the finger roots). Each is
                 // low where the other holds; the larger one counts.
-                if (LATERAL_SOURCE != 0u && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
+                if ((LATERAL_SOURCE == 2u || LATERAL_SOURCE == 255u) && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
                     let flux = lut_row(s_shape, DIFFUSION_RANGE_MM, FLUX_ROW);
                     let shape = select(vec3<f32>(0.0), exit / flux, flux > vec3<f32>(1e-7));
-                    var lateral: vec3<f32>;
-                    if (LATERAL_SOURCE == 1u || (LATERAL_SOURCE == 255u && screen.from_map && lights.lateral_downsample > 1u)) {
-                        lateral = lateral_from_map(index, screen, facing > 0.0);
-                    } else {
-                        lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
-                    }
+                    let lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
                     diffuse = max(diffuse, shape * lateral);
                 }
                 out.diffuse = diffuse * unlit;

@@ -85,14 +85,17 @@ pub struct TransmittanceSettings {
     /// beside thinner ones (a palm, the finger roots) most light comes that way. 0: the chord's
     /// slab alone.
     pub lateral_taps: u32,
-    /// `diffusion`: the lateral taps run on a map whose texels are about this many profile
+    /// `diffusion`: all of it (the chord's slab, the lateral taps, the unscattered lobe, single
+    /// scattering), for every light, runs on a map whose texels are about this many profile
     /// millimetres apart on the skin (0..=50), in a pass of their own, and each pixel
-    /// interpolates the four nearest results on its own surface (where none is, the nearest in
-    /// depth of the 4 x 4 around it). The light they gather varies over millimetres, not
-    /// pixels, so the map's reduction follows the skin's size on screen (`lateral_downsample`):
-    /// the same texels in millimetres at any resolution, on the nearest skin (a farther skin
-    /// whose texels come out coarser than [`MAX_TEXEL_FACTOR`] times this gathers the taps at
-    /// each of its pixels). 0 runs them at every pixel inside the lighting pass.
+    /// interpolates the lights' sum from the four nearest texels on its own surface (where
+    /// none is, an outline, it runs each light's chord itself and keeps the larger of that and
+    /// the diffuse light of the nearest texel in depth). What crosses skin varies over
+    /// millimetres, not pixels, so the map's reduction follows the skin's size on screen
+    /// (`lateral_downsample`): the same texels in millimetres at any resolution, on the nearest
+    /// skin (a farther skin whose texels come out coarser than [`MAX_TEXEL_FACTOR`] times this
+    /// runs everything at each of its pixels). 0 runs it at every pixel inside the lighting
+    /// pass.
     pub lateral_texel_mm: f32,
 }
 
