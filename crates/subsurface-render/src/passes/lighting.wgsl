@@ -18,7 +18,8 @@ struct LitVarying {
     @location(3) tangent: vec4<f32>,
 };
 
-fn lit_varying(v: VertexIn) -> LitVarying {
+@vertex
+fn vs_main(v: VertexIn) -> LitVarying {
     var out: LitVarying;
     let world = world_position(v);
     out.world = world.xyz;
@@ -27,11 +28,6 @@ fn lit_varying(v: VertexIn) -> LitVarying {
     out.tangent = world_tangent(v);
     out.uv = v.uv;
     return out;
-}
-
-@vertex
-fn vs_main(v: VertexIn) -> LitVarying {
-    return lit_varying(v);
 }
 
 // Largest finite half float: what the Rgba16Float radiance targets can hold.
@@ -144,7 +140,7 @@ struct LateralPair {
 // texel of a few millimetres serves a block of pixels, and the lighting pass reads one
 // interpolated value per pixel instead of running each light's thickness, LUT reads, taps
 // and single-scattering march. With the lateral taps alone in the map, `diffusion` cost
-// +65 % of `paper`'s lighting pass on an H100 at 1920x1080; with everything, +22 %
+// +65 % of `paper`'s lighting pass on an H100 at 1920x1080; with everything, +19 %
 // (docs/performance.md).
 @fragment
 fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
