@@ -981,14 +981,20 @@ impl LightingPass {
 mod tests {
     use super::*;
 
-    /// The frame's pipeline gathers the taps itself only without a map (objects too far for
-    /// the map get that variant through `set_taps_objects`).
-    #[test]
-    fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
+    /// `diffusion` with 12 taps and a map of one texel per 4x4 pixels, no lights.
+    fn diffusion_with_a_map() -> LightsUniform {
         let mut lights: LightsUniform = bytemuck::Zeroable::zeroed();
         lights.transmittance = TransmittanceMethod::Diffusion.code();
         lights.lateral_taps = 12;
         lights.lateral_downsample = 4;
+        lights
+    }
+
+    /// The frame's pipeline gathers the taps itself only without a map (objects too far for
+    /// the map get that variant through `set_taps_objects`).
+    #[test]
+    fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
+        let mut lights = diffusion_with_a_map();
         assert_eq!(lateral_source(&lights), 1);
         lights.lateral_downsample = 1;
         assert_eq!(lateral_source(&lights), 2);
@@ -1003,10 +1009,7 @@ mod tests {
     /// and a shadowed light, into two layers before the bounce's.
     #[test]
     fn the_transmitted_light_takes_two_layers_before_the_bounce() {
-        let mut lights: LightsUniform = bytemuck::Zeroable::zeroed();
-        lights.transmittance = TransmittanceMethod::Diffusion.code();
-        lights.lateral_taps = 12;
-        lights.lateral_downsample = 4;
+        let mut lights = diffusion_with_a_map();
         lights.count = 2;
         lights.lights[0].first_layer = -1.0;
         lights.lights[1].first_layer = -1.0;
