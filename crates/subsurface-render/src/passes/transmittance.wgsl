@@ -162,7 +162,15 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     if (!sc.inside) {
         return e;
     }
-    let texels = shadow_distance(light, sc, i32(lights.thickness_filter));
+    // The lighting pipeline that reads the lateral map runs this only at outline pixels, with
+    // one texel: the N x N loop's code cost 0.14 ms of registers at every pixel of that pass on
+    // an H100 (docs/performance.md). Written as min(N, 1), not a literal 1: with the literal,
+    // Mesa 22.3's lavapipe chose to inline this pipeline's uniforms and compiled a new copy of
+    // it at every bind without freeing the last (11 MB and 65 ms a frame at 320x240; the
+    // viewer's soak test grew 18 % in ten cycles), while a bound that still reads a uniform
+    // keeps the shader it compiled once (docs/performance.md, "lavapipe's inlined uniforms").
+    let taps = i32(lights.thickness_filter);
+    let texels = shadow_distance(light, sc, select(taps, min(taps, 1), LATERAL_SOURCE == 1u));
     let d_in = texels.x;
     if (d_in < 0.0) {
         return e;
@@ -268,9 +276,7 @@ const SCATTER_STEPS: i32 = 8;
 // shader holds costs registers at every pixel of that pipeline on an H100, taken or not
 // (1920x1080, the default scene: its lighting pass 2.80 ms with eight steps, 2.71 with four,
 // `paper`'s 2.55), for 0.8 point on the finger's outline against the path tracer
-// (docs/performance.md). The thickness stays the N x N average there: a single texel saved
-// another 0.14 ms but made lavapipe keep 12 MB per build of the pipeline (the viewer's soak
-// test grew 18 % in ten cycles).
+// (docs/performance.md); the thickness there is a single texel (light_entry).
 const OUTLINE_SCATTER_STEPS: i32 = 4;
 // An override, so that each pipeline's march has a constant trip count.
 override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == 1u);
