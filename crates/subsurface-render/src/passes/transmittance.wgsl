@@ -166,7 +166,7 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     // one texel: the N x N loop's code cost 0.14 ms of registers at every pixel of that pass on
     // an H100 (docs/performance.md). Written as min(N, 1), not a literal 1: with the literal,
     // Mesa 22.3's lavapipe chose to inline this pipeline's uniforms and compiled a new copy of
-    // it at every bind without freeing the last (11 MB and 65 ms a frame at 320x240; the
+    // it at every bind without freeing the last (11 MB and 55 ms a frame at 320x240; the
     // viewer's soak test grew 18 % in ten cycles), while a bound that still reads a uniform
     // keeps the shader it compiled once (docs/performance.md, "lavapipe's inlined uniforms").
     let taps = i32(lights.thickness_filter);
