@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 use subsurface_profile::Medium;
 use subsurface_render::{
-    GpuContext, PassTiming, RenderOptions, Renderer, Scene, SssFetch, SssMethod,
+    GpuContext, LateralPass, PassTiming, RenderOptions, Renderer, Scene, SssFetch, SssMethod,
     TransmittanceMethod,
 };
 
@@ -69,6 +69,12 @@ pub struct BenchArgs {
     /// texel per 4x4 pixels).
     #[arg(long, value_delimiter = ',', value_name = "MM,..")]
     pub lateral_texel_mm: Vec<f32>,
+    /// Diffusion runs: how the lateral map is evaluated, compute and/or fragment,
+    /// comma-separated; the same map, so `compute,fragment` compares their cost [default: the
+    /// scene's render.transmittance.lateral_pass]. The table marks fragment runs
+    /// (`diffusion/12:8 frag`).
+    #[arg(long, value_delimiter = ',', value_name = "PASS,..")]
+    pub lateral_pass: Vec<LateralPass>,
     /// The bounce's ring (0..=8; 0 = off), comma-separated, e.g. 0,2 for what gathering the
     /// light between parts costs [default: the scene's render.bounce.ring]. The table names
     /// each run's ring after its transmittance (`paper b2`).
@@ -165,6 +171,10 @@ struct Run {
     lateral_texel_mm: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     lateral_downsample: Option<u32>,
+    /// Diffusion runs: how the lateral map was evaluated (`compute`, `fragment`; `fragment`
+    /// also where the adapter cannot run the compute evaluation).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lateral_pass: Option<&'static str>,
     /// The bounce's ring (0: none).
     bounce_ring: u32,
     /// Median frame time (sum of the passes, copy baseline excluded).
@@ -198,6 +208,10 @@ impl Run {
             (Some(taps), None) => format!("{}/{taps}", self.transmittance),
             _ => self.transmittance.clone(),
         };
+        let label = match self.lateral_pass {
+            Some("fragment") => format!("{label} frag"),
+            _ => label,
+        };
         match self.bounce_ring {
             0 => label,
             ring => format!("{label} b{ring}"),
@@ -205,16 +219,17 @@ impl Run {
     }
 }
 
-/// The lateral tap counts and texel sizes a transmittance method is measured at:
-/// `--lateral-taps` x `--lateral-texel-mm` for diffusion (the scene's own where a list is
-/// empty), nothing to vary for the others.
+/// The lateral tap counts, texel sizes and passes a transmittance method is measured at:
+/// `--lateral-taps` x `--lateral-texel-mm` x `--lateral-pass` for diffusion (the scene's own
+/// where a list is empty), nothing to vary for the others.
 fn lateral_counts(
     tm: TransmittanceMethod,
     taps: &[u32],
     texel_mm: &[f32],
-) -> Vec<(Option<u32>, Option<f32>)> {
+    passes: &[LateralPass],
+) -> Vec<LateralRun> {
     if tm != TransmittanceMethod::Diffusion {
-        return vec![(None, None)];
+        return vec![LateralRun::default()];
     }
     let taps: Vec<_> = if taps.is_empty() {
         vec![None]
@@ -226,9 +241,32 @@ fn lateral_counts(
     } else {
         texel_mm.iter().map(|d| Some(*d)).collect()
     };
-    taps.iter()
-        .flat_map(|t| texel_mm.iter().map(move |d| (*t, *d)))
-        .collect()
+    let passes: Vec<_> = if passes.is_empty() {
+        vec![None]
+    } else {
+        passes.iter().map(|p| Some(*p)).collect()
+    };
+    let mut out = Vec::new();
+    for t in &taps {
+        for d in &texel_mm {
+            for p in &passes {
+                out.push(LateralRun {
+                    taps: *t,
+                    texel_mm: *d,
+                    pass: *p,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// One diffusion run's lateral settings (`None`: the scene's own).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct LateralRun {
+    taps: Option<u32>,
+    texel_mm: Option<f32>,
+    pass: Option<LateralPass>,
 }
 
 #[derive(Serialize)]
@@ -373,8 +411,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         TransmittanceMethod::Diffusion,
         &args.lateral_taps,
         &args.lateral_texel_mm,
+        &[],
     );
-    for (taps, texel_mm) in diffusion {
+    for LateralRun { taps, texel_mm, .. } in diffusion {
         let mut t = subsurface_render::TransmittanceSettings::default();
         if let Some(taps) = taps {
             t.lateral_taps = taps;
@@ -408,7 +447,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         * args
             .transmittance
             .iter()
-            .map(|tm| lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm).len())
+            .map(|tm| {
+                lateral_counts(
+                    *tm,
+                    &args.lateral_taps,
+                    &args.lateral_texel_mm,
+                    &args.lateral_pass,
+                )
+                .len()
+            })
             .sum::<usize>();
     let bar = indicatif::ProgressBar::new(
         configs as u64 * (args.warmup + args.frames) as u64 * args.rounds as u64,
@@ -443,22 +490,30 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             });
             for (method, fetch) in methods {
                 let transmittances = args.transmittance.iter().flat_map(|tm| {
-                    lateral_counts(*tm, &args.lateral_taps, &args.lateral_texel_mm)
-                        .into_iter()
-                        .flat_map(|(taps, mm)| rings.iter().map(move |r| (taps, mm, *r)))
-                        .map(move |(taps, mm, ring)| (*tm, taps, mm, ring))
+                    lateral_counts(
+                        *tm,
+                        &args.lateral_taps,
+                        &args.lateral_texel_mm,
+                        &args.lateral_pass,
+                    )
+                    .into_iter()
+                    .flat_map(|lateral| rings.iter().map(move |r| (lateral, *r)))
+                    .map(move |(lateral, ring)| (*tm, lateral, ring))
                 });
-                for (tm, taps, texel_mm, ring) in transmittances {
+                for (tm, lateral, ring) in transmittances {
                     let mut opts = RenderOptions::from_scene(&scene);
                     let s = &mut opts.settings;
                     if let Some(ring) = ring {
                         s.bounce.ring = ring;
                     }
-                    if let Some(taps) = taps {
+                    if let Some(taps) = lateral.taps {
                         s.transmittance.lateral_taps = taps;
                     }
-                    if let Some(mm) = texel_mm {
+                    if let Some(mm) = lateral.texel_mm {
                         s.transmittance.lateral_texel_mm = mm;
+                    }
+                    if let Some(pass) = lateral.pass {
+                        s.transmittance.lateral_pass = pass;
                     }
                     (s.width, s.height) = (w, h);
                     s.sss.method = method;
@@ -515,6 +570,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             if tm == TransmittanceMethod::Diffusion {
                 run.lateral_texel_mm = Some(opts.settings.transmittance.lateral_texel_mm);
                 run.lateral_downsample = Some(renderer.targets.lateral_downsample());
+                run.lateral_pass = renderer.targets.lateral_computed().map(|computed| {
+                    if computed {
+                        LateralPass::Compute.name()
+                    } else {
+                        LateralPass::Fragment.name()
+                    }
+                });
             }
             run.profiles = renderer.profile_table().kernels.len() as u32;
             run.bounce_ring = opts.settings.bounce.ring;
@@ -629,6 +691,7 @@ fn summarise(
         lateral_taps: None,
         lateral_texel_mm: None,
         lateral_downsample: None,
+        lateral_pass: None,
         bounce_ring: 0,
         frame_ms,
         round_frame_ms: Vec::new(),

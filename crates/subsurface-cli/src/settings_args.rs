@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use glam::{Mat4, Vec3};
-use subsurface_render::{Scene, SssFetch, SssMethod, TransmittanceMethod};
+use subsurface_render::{LateralPass, Scene, SssFetch, SssMethod, TransmittanceMethod};
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct SettingsArgs {
@@ -95,6 +95,13 @@ pub struct SettingsArgs {
     /// [default: render.transmittance.lateral_texel_mm, 4].
     #[arg(long, value_name = "MM")]
     pub lateral_texel_mm: Option<f32>,
+    /// Diffusion: how the lateral map is evaluated, compute (its raster pass records each
+    /// texel's surface, then a compute shader per object evaluates it; adapters without
+    /// storage textures fall back to fragment) or fragment (in the raster pass's fragment
+    /// shader); the same map at a different cost [default: render.transmittance.lateral_pass,
+    /// compute].
+    #[arg(long, value_name = "PASS")]
+    pub lateral_pass: Option<LateralPass>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
@@ -147,6 +154,7 @@ impl SettingsArgs {
         set!(self.thickness_filter, r.transmittance.thickness_filter);
         set!(self.lateral_taps, r.transmittance.lateral_taps);
         set!(self.lateral_texel_mm, r.transmittance.lateral_texel_mm);
+        set!(self.lateral_pass, r.transmittance.lateral_pass);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
         set!(self.bounce_ring, r.bounce.ring);
         set!(self.bounce_cell_mm, r.bounce.cell_mm);
@@ -304,6 +312,7 @@ mod tests {
             samples: Some(9),
             jitter: true,
             sss_fetch: Some(SssFetch::Direct),
+            lateral_pass: Some(LateralPass::Fragment),
             sss: Some(SssMethod::Hable13),
             sss_width: Some(2.0),
             kernel_strength: Some([1.0, 0.5, 0.25]),
@@ -313,6 +322,10 @@ mod tests {
         assert_eq!(scene.desc.render.sss.samples, 9);
         assert!(scene.desc.render.sss.jitter);
         assert_eq!(scene.desc.render.sss.fetch, SssFetch::Direct);
+        assert_eq!(
+            scene.desc.render.transmittance.lateral_pass,
+            LateralPass::Fragment
+        );
         assert_eq!(scene.desc.render.sss.method, SssMethod::Hable13);
         for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {
             assert_eq!(o.material.sss_width, 2.0);

@@ -13,7 +13,7 @@ use crate::material::{MaterialCache, MaterialOptics};
 use crate::mesh::Vertex;
 use crate::passes::transmittance::lut_texture;
 use crate::scene::{LightDesc, LightKind, Object, Scene};
-use crate::settings::RenderSettings;
+use crate::settings::{LateralPass, RenderSettings};
 use crate::uniforms::{CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS, ObjectUniform, mat};
 
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
@@ -24,7 +24,9 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
 
 /// Bind group layout of group 1 (`Object` + material maps), shared by shadow and lighting.
 pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let fragment = wgpu::ShaderStages::FRAGMENT;
+    // Compute too: the lateral map's evaluation (lateral.wgsl, `cs_transmitted`) reads the
+    // object's uniform and LUT.
+    let fragment = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let tex = |binding| {
         layout::float_texture_entry(binding, fragment, true, wgpu::TextureViewDimension::D2)
     };
@@ -33,7 +35,10 @@ pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("object"),
         entries: &[
-            layout::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            layout::uniform_entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ),
             tex(1),
             tex(2),
             tex(3),
@@ -99,7 +104,9 @@ pub fn object_uniform(
         lateral_decay: Some(optics.transport.lateral_decay_per_mm())
             .filter(|d| d.is_finite())
             .map_or(0.0, |d| d as f32),
-        _pad: [0.0; 2],
+        // The caller's: the object's place in its draw list (`upload_objects`).
+        index: 0,
+        _pad: 0.0,
         scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
         boundary_fit: boundary_fit(m.roughness, optics.dipole.eta),
@@ -257,12 +264,15 @@ pub fn upload_objects(
         let (lut, lut_range) = &luts[&key];
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&label),
-            contents: bytemuck::bytes_of(&object_uniform(
-                object,
-                &optics,
-                *lut_range,
-                profile_rows.get(i).copied().unwrap_or(0),
-            )),
+            contents: bytemuck::bytes_of(&ObjectUniform {
+                index: out.len() as u32,
+                ..object_uniform(
+                    object,
+                    &optics,
+                    *lut_range,
+                    profile_rows.get(i).copied().unwrap_or(0),
+                )
+            }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let albedo = upload_texture(
@@ -500,6 +510,7 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     uniform.normal_shrink = transmittance.normal_shrink;
     uniform.thickness_filter = transmittance.thickness_filter;
     uniform.lateral_taps = transmittance.lateral_taps;
+    uniform.lateral_compute = u32::from(transmittance.lateral_pass == LateralPass::Compute);
     uniform.lateral_downsample =
         lateral_downsample(scene, settings, settings.width, settings.height);
     uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);

@@ -24,8 +24,9 @@ pub use passes::tonemap::DebugView;
 pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
-    BounceSettings, DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,
-    RenderSettings, SssFetch, SssMethod, SssSettings, TransmittanceMethod, TransmittanceSettings,
+    BounceSettings, DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE,
+    MAX_TEXEL_FACTOR, RenderSettings, SssFetch, SssMethod, SssSettings, TransmittanceMethod,
+    TransmittanceSettings,
 };
 pub use timing::PassTiming;
 
@@ -82,8 +83,17 @@ mod shader_tests {
             let mut constants = naga::back::PipelineConstants::default();
             constants.insert("TRANSMITTANCE_METHOD".into(), f64::from(code));
             constants.insert("LATERAL_SOURCE".into(), f64::from(source));
-            for entry in ["fs_main", "fs_transmitted", "fs_bounce"] {
-                let stage = Some((naga::ShaderStage::Fragment, entry));
+            // The lateral map's compute evaluation (lateral.wgsl) is specialized alike.
+            let entries = [
+                (naga::ShaderStage::Fragment, "fs_main"),
+                (naga::ShaderStage::Fragment, "fs_transmitted"),
+                (naga::ShaderStage::Fragment, "fs_bounce"),
+                (naga::ShaderStage::Fragment, "fs_surface"),
+                (naga::ShaderStage::Compute, "cs_transmitted"),
+                (naga::ShaderStage::Compute, "cs_bounce"),
+            ];
+            for (shader_stage, entry) in entries {
+                let stage = Some((shader_stage, entry));
                 let (specialized, specialized_info) =
                     naga::back::pipeline_constants::process_overrides(
                         &module, &info, stage, &constants,
@@ -91,7 +101,7 @@ mod shader_tests {
                     .unwrap_or_else(|e| panic!("method {code}, source {source}, {entry}: {e:?}"));
                 let options = naga::back::spv::Options::default();
                 let pipeline = naga::back::spv::PipelineOptions {
-                    shader_stage: naga::ShaderStage::Fragment,
+                    shader_stage,
                     entry_point: entry.into(),
                 };
                 naga::back::spv::write_vec(

@@ -371,21 +371,24 @@ impl Renderer {
             self.lut_keys = keys;
         } else {
             let mut cache = MaterialCache::default();
-            let mut gpu = self.objects.iter();
+            let mut gpu = self.objects.iter().enumerate();
             for (i, o) in scene.objects.iter().enumerate() {
                 if o.mesh.indices.is_empty() {
                     continue;
                 }
-                let Some(g) = gpu.next() else { break };
+                let Some((index, g)) = gpu.next() else { break };
                 let optics =
                     cache.get(&o.material.medium, &format!("objects[{i}].material.medium"))?;
                 let row = profiles.object_rows[i];
-                let u = gpu_scene::object_uniform(
-                    o,
-                    &optics,
-                    subsurface_profile::TransmittanceLut::DEFAULT_S_MAX_MM,
-                    row,
-                );
+                let u = crate::uniforms::ObjectUniform {
+                    index: index as u32,
+                    ..gpu_scene::object_uniform(
+                        o,
+                        &optics,
+                        subsurface_profile::TransmittanceLut::DEFAULT_S_MAX_MM,
+                        row,
+                    )
+                };
                 queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
             }
         }

@@ -73,7 +73,11 @@ pub struct LightsUniform {
     pub bounce_ring: u32,
     /// `BounceSettings::cell_mm`: the finest cells read, profile millimetres.
     pub bounce_cell_mm: f32,
-    pub _pad: [u32; 2],
+    /// 1: the lateral map is evaluated by a compute shader on its texels' surfaces
+    /// (`LateralPass::Compute`), 0: by the map's fragment shader. Read on the host only (the
+    /// lateral targets' shape, `passes::lighting::LateralShape`); the shaders see the same map.
+    pub lateral_compute: u32,
+    pub _pad: u32,
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -106,7 +110,10 @@ pub struct ObjectUniform {
     /// The medium's slowest decay rate per mm, which spreads the lateral taps
     /// (`subsurface_profile::TransportTable::lateral_decay_per_mm`).
     pub lateral_decay: f32,
-    pub _pad: [f32; 2],
+    /// The object's index in the frame's draw list: the lateral map's surface targets record
+    /// it, and each object's compute dispatch evaluates only its own texels.
+    pub index: u32,
+    pub _pad: f32,
     /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
     pub scattering: [f32; 3],
     pub _pad2: f32,

@@ -561,6 +561,63 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
     assert!(bounced > 100, "only {bounced} texels received a bounce");
 }
 
+/// The lateral map from its compute evaluation (`fs_surface`, then `cs_transmitted` and
+/// `cs_bounce` once per object) against its fragment shaders (`fs_transmitted`, `fs_bounce`):
+/// the same function at the same points, so the same numbers. The wedge is made half as
+/// translucent as the hand, so a dispatch that evaluated another object's texels with its own
+/// uniform (the index test) would change them.
+#[test]
+fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
+    use subsurface_render::LateralPass;
+    let Some(ctx) = context() else { return };
+    let mut scene = subsurface_render::Scene::default_scene();
+    assert_eq!(scene.objects.len(), 2, "the hand and the wedge");
+    scene.objects[1].material.translucency *= 0.5;
+    let layers = |pass: LateralPass| {
+        let mut opts = options(&scene, 256, 256);
+        opts.settings.transmittance.lateral_pass = pass;
+        let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
+        r.render().unwrap();
+        assert_eq!(
+            r.targets.lateral_computed(),
+            Some(pass == LateralPass::Compute),
+            "{pass}: evaluated elsewhere"
+        );
+        let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+        assert_eq!(map.depth_or_array_layers(), 3);
+        (0..3)
+            .map(|l| {
+                let bytes = subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
+                subsurface_render::readback::decode_float(map.format(), &bytes).0
+            })
+            .collect::<Vec<_>>()
+    };
+    let (compute, fragment) = (layers(LateralPass::Compute), layers(LateralPass::Fragment));
+    for layer in 0..3 {
+        let (mut lit, mut drawn) = (0, 0);
+        for (a, b) in compute[layer]
+            .chunks_exact(4)
+            .zip(fragment[layer].chunks_exact(4))
+        {
+            assert!(a[3] == b[3], "layer {layer}: a texel's depth differs");
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-4 * b[c].abs() + 1e-9,
+                    "layer {layer}: {} computed, {} from the fragment shader",
+                    a[c],
+                    b[c]
+                );
+            }
+            drawn += usize::from(b[3] > 0.0);
+            lit += usize::from(b[0] > 0.0);
+        }
+        assert!(
+            drawn > 500 && lit > 50,
+            "layer {layer}: {drawn} texels drawn, {lit} lit"
+        );
+    }
+}
+
 /// Contexts made, used and dropped on several threads at once, as `cargo test` does. NVIDIA's
 /// Linux driver crashed the whole test process (SIGSEGV) here before `GpuContext` serialised
 /// instance and device creation and teardown; lavapipe passes either way, so this guards the

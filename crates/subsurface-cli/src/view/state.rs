@@ -242,6 +242,7 @@ mod tests {
                 normal_shrink: 0.0007,
                 lateral_taps: 7,
                 lateral_texel_mm: 3.5,
+                lateral_pass: subsurface_render::LateralPass::Fragment,
             },
             view: DebugView::Final,
         };

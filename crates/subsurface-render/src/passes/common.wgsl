@@ -44,7 +44,8 @@ struct Lights {
     bounce_layer: u32,     // the lateral map's layer holding the bounce (bounce.wgsl)
     bounce_ring: u32,      // cells of each pyramid level between a point and the next; 0 = off
     bounce_cell_mm: f32,   // the finest cells read, profile mm
-    _pad3: vec2<u32>,
+    lateral_compute: u32,  // host only: the lateral map is evaluated by cs_transmitted
+    _pad3: u32,
     lights: array<Light, MAX_LIGHTS>,
 };
 
@@ -65,6 +66,7 @@ struct Object {
     lut_range_mm: f32,     // thickness range of the T(s) LUT
     eta: f32,              // relative index of refraction of the boundary
     lateral_decay: f32,    // the medium's slowest decay rate, 1/mm (spreads the lateral taps)
+    index: u32,            // in the frame's draw list (lateral.wgsl's surface targets)
     scattering: vec3<f32>, // reduced scattering sigma_s', 1/mm (isotropic phase)
     // The rough boundary's transmittance against the cosine: coefficients 0-3 and 4-7 of a
     // degree-7 polynomial (transmittance.wgsl, boundary_transmittance).

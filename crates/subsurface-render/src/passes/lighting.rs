@@ -8,10 +8,12 @@
 //!
 //! With `diffusion` and lateral taps, a lateral pass runs first: the meshes' front faces again
 //! at a reduced resolution ([`LateralTargets`], the reduction from
-//! `gpu_scene::lateral_downsample`), where `fs_transmitted` evaluates `diffusion`'s whole
-//! transmitted light, every light together, into a map the lighting pass then interpolates
-//! once per pixel (transmittance.wgsl, `transmitted_from_map`); a lighting pipeline built for
-//! the map holds no taps of its own ([`lateral_source`]).
+//! `gpu_scene::lateral_downsample`), where `diffusion`'s whole transmitted light is evaluated,
+//! every light together, into a map the lighting pass then interpolates once per pixel
+//! (transmittance.wgsl, `transmitted_from_map`); a lighting pipeline built for the map holds
+//! no taps of its own ([`lateral_source`]). By default (`LateralPass::Compute`) that pass only
+//! records each texel's surface and a compute shader evaluates it, once per object, as it does
+//! the bounce (lateral.wgsl); otherwise its fragment shaders do.
 //!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps) is built by [`frame_layout`];
 //! group 1 is the object's (`gpu_scene::object_layout`), group 2 the object's texture-space
@@ -35,7 +37,8 @@ pub const SHADER: &str = concat!(
     include_str!("lighting.wgsl"),
     include_str!("shadow_lookup.wgsl"),
     include_str!("transmittance.wgsl"),
-    include_str!("bounce.wgsl")
+    include_str!("bounce.wgsl"),
+    include_str!("lateral.wgsl")
 );
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
@@ -79,6 +82,47 @@ pub struct LateralTargets {
     pub map: wgpu::Texture,
     layers: Vec<wgpu::TextureView>,
     zbuffer: wgpu::TextureView,
+    /// Where the transmitted light and the bounce are evaluated in a compute shader
+    /// ([`LateralShape::compute`] on an adapter that supports it): the texels' surfaces.
+    surface: Option<LateralSurface>,
+    /// What the shape asked for (an adapter without storage textures evaluates in the fragment
+    /// shader all the same): compared with the next frame's shape.
+    compute_asked: bool,
+}
+
+/// The lateral map's texels' surfaces (`fs_surface` in lateral.wgsl): world position and view
+/// depth; the normal turned toward the camera and the object's index. `cs_transmitted`
+/// evaluates the transmitted light there.
+struct LateralSurface {
+    targets: [wgpu::TextureView; 2],
+    /// Group 2 of `cs_transmitted` ([`lateral_compute_layout`]): the surfaces, and the map
+    /// written as storage.
+    bind_group: wgpu::BindGroup,
+}
+
+/// Layout of group 2 of the lateral map's compute evaluation (`surface_position`,
+/// `surface_normal` and `transmitted_out` in lateral.wgsl).
+pub fn lateral_compute_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let compute = wgpu::ShaderStages::COMPUTE;
+    let d2 = wgpu::TextureViewDimension::D2;
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lateral compute"),
+        entries: &[
+            util::float_texture_entry(8, compute, false, d2),
+            util::float_texture_entry(9, compute, false, d2),
+            util::storage_texture_entry(
+                10,
+                compute,
+                LATERAL_FORMAT,
+                wgpu::TextureViewDimension::D2Array,
+            ),
+        ],
+    })
+}
+
+/// Whether `device` can evaluate the lateral map in a compute shader (storage textures).
+pub fn supports_lateral_compute(device: &wgpu::Device) -> bool {
+    util::supports_compute_storage(device)
 }
 
 /// 32-bit depth beside the light: the lighting pass compares it with its own pixel's to the
@@ -86,12 +130,28 @@ pub struct LateralTargets {
 pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl LateralTargets {
-    pub fn new(ctx: &GpuContext, width: u32, height: u32, downsample: u32, layers: u32) -> Self {
+    /// `compute`: with the surfaces the transmitted light's compute evaluation reads (ignored
+    /// where the adapter cannot run it, [`supports_lateral_compute`]).
+    pub fn new(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        downsample: u32,
+        layers: u32,
+        compute: bool,
+    ) -> Self {
         let device = &ctx.device;
         let downsample = downsample.max(1);
         // The transmitted light's two, and the bounce's after them.
         let layer_count = layers.clamp(1, TRANSMITTED_LAYERS + 1);
         let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
+        let compute_asked = compute;
+        let compute = compute && supports_lateral_compute(device);
+        let storage = if compute {
+            wgpu::TextureUsages::STORAGE_BINDING
+        } else {
+            wgpu::TextureUsages::empty()
+        };
         let map = util::texture_2d(
             device,
             "lateral map",
@@ -101,7 +161,8 @@ impl LateralTargets {
             LATERAL_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+                | wgpu::TextureUsages::COPY_SRC
+                | storage,
         );
         let layers = (0..layer_count)
             .map(|layer| {
@@ -114,6 +175,39 @@ impl LateralTargets {
                 })
             })
             .collect();
+        let surface = compute.then(|| {
+            let target = |label| {
+                util::texture_2d(
+                    device,
+                    label,
+                    w,
+                    h,
+                    1,
+                    LATERAL_FORMAT,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                )
+                .create_view(&Default::default())
+            };
+            let targets = [
+                target("lateral surface position"),
+                target("lateral surface normal"),
+            ];
+            let map_view = util::array_view(&map);
+            let bind_group = util::bind_group(
+                device,
+                "lateral compute",
+                &lateral_compute_layout(device),
+                [
+                    (8, wgpu::BindingResource::TextureView(&targets[0])),
+                    (9, wgpu::BindingResource::TextureView(&targets[1])),
+                    (10, wgpu::BindingResource::TextureView(&map_view)),
+                ],
+            );
+            LateralSurface {
+                targets,
+                bind_group,
+            }
+        });
         Self {
             downsample,
             layer_count,
@@ -122,7 +216,14 @@ impl LateralTargets {
             map,
             layers,
             zbuffer: util::depth_buffer(device, "lateral z-buffer", w, h),
+            surface,
+            compute_asked,
         }
+    }
+
+    /// Whether the transmitted light is evaluated in a compute shader on the texels' surfaces.
+    pub fn computed(&self) -> bool {
+        self.surface.is_some()
     }
 }
 
@@ -208,6 +309,16 @@ impl LightingTargets {
         self.lateral.as_ref().map_or(1, |l| l.downsample)
     }
 
+    /// Where the lateral map holds the transmitted light: whether a compute shader evaluates
+    /// it (`LateralPass::Compute` on an adapter that runs it) rather than the map's fragment
+    /// shader. None without such a map.
+    pub fn lateral_computed(&self) -> Option<bool> {
+        self.lateral
+            .as_ref()
+            .filter(|l| l.layer_count >= TRANSMITTED_LAYERS)
+            .map(LateralTargets::computed)
+    }
+
     /// The shape of the lateral map these targets hold.
     pub fn lateral_shape(&self) -> LateralShape {
         self.lateral
@@ -215,6 +326,7 @@ impl LightingTargets {
             .map_or(LateralShape::NONE, |l| LateralShape {
                 downsample: l.downsample,
                 layers: l.layer_count,
+                compute: l.compute_asked,
             })
     }
 
@@ -232,12 +344,16 @@ impl LightingTargets {
 pub struct LateralShape {
     pub downsample: u32,
     pub layers: u32,
+    /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
+    /// surfaces (`LateralPass::Compute`) rather than in the map's fragment shaders.
+    pub compute: bool,
 }
 
 impl LateralShape {
     pub const NONE: Self = Self {
         downsample: 1,
         layers: 0,
+        compute: false,
     };
 
     /// For `lights` ([`transmitted_map`]; their uniform's `lateral_downsample`): none where
@@ -254,6 +370,7 @@ impl LateralShape {
         Self {
             downsample: lights.lateral_downsample,
             layers,
+            compute: lights.lateral_compute != 0,
         }
     }
 }
@@ -267,8 +384,16 @@ fn lateral_targets(
     shape: LateralShape,
 ) -> (Option<LateralTargets>, wgpu::BindGroup) {
     let device = &ctx.device;
-    let lateral = (shape.downsample > 1 && shape.layers > 0)
-        .then(|| LateralTargets::new(ctx, width, height, shape.downsample, shape.layers));
+    let lateral = (shape.downsample > 1 && shape.layers > 0).then(|| {
+        LateralTargets::new(
+            ctx,
+            width,
+            height,
+            shape.downsample,
+            shape.layers,
+            shape.compute,
+        )
+    });
     let screen = match &lateral {
         Some(l) => screen_bind_group(device, &l.map),
         None => screen_bind_group(device, &dummy_lateral_map(device)),
@@ -304,21 +429,19 @@ pub fn bounce_layer(lights: &LightsUniform) -> Option<u32> {
 /// so other pipelines built on the lighting shader (the texture-space irradiance) may bind
 /// [`LightingPass::frame_bind_group`].
 pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX_FRAGMENT);
+    // Compute too: the lateral map's evaluation (lateral.wgsl, `cs_transmitted`) reads the
+    // camera, the lights and the shadow maps.
+    let stages = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX | stages);
     // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
     let atlas = |binding| {
-        util::float_texture_entry(
-            binding,
-            wgpu::ShaderStages::FRAGMENT,
-            false,
-            wgpu::TextureViewDimension::D2Array,
-        )
+        util::float_texture_entry(binding, stages, false, wgpu::TextureViewDimension::D2Array)
     };
     // The shadow maps' z-buffer, read through a comparison sampler: each gather tests a 2x2
     // block of texels in the texture unit (hardware PCF).
     let depth = wgpu::BindGroupLayoutEntry {
         binding: 4,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility: stages,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Depth,
             view_dimension: wgpu::TextureViewDimension::D2Array,
@@ -338,11 +461,7 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             atlas(6),
             atlas(7),
             atlas(8),
-            util::sampler_entry(
-                5,
-                wgpu::ShaderStages::FRAGMENT,
-                wgpu::SamplerBindingType::Comparison,
-            ),
+            util::sampler_entry(5, stages, wgpu::SamplerBindingType::Comparison),
         ],
     })
 }
@@ -360,17 +479,27 @@ pub struct ShadowMaps<'a> {
     pub flux: Option<[&'a wgpu::TextureView; 3]>,
 }
 
-/// One pass over the lateral map: `pipeline` into its `layers`, timed as `timed`, the first
-/// of a frame clearing the map's z-buffer (the later ones shade only the surfaces it kept).
+/// One raster pass at the lateral map's resolution: `pipeline` into `targets` (layers of the
+/// map, or the texels' surfaces), timed as `timed`, the first of a frame clearing the map's
+/// z-buffer (the later ones shade only the surfaces it kept).
 struct MapPass<'a> {
     timed: &'static str,
-    layers: &'a [u32],
+    targets: Vec<&'a wgpu::TextureView>,
     first: bool,
     pipeline: &'a wgpu::RenderPipeline,
 }
 
 /// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
 const METHOD_CONSTANT: &str = "TRANSMITTANCE_METHOD";
+
+/// The lateral pass's overrides: `diffusion`, the lateral taps included (LATERAL_SOURCE 2).
+const DIFFUSION_WHOLE: [(&str, f64); 2] = [
+    (
+        METHOD_CONSTANT,
+        TransmittanceMethod::Diffusion.code() as f64,
+    ),
+    (LATERAL_CONSTANT, 2.0),
+];
 
 /// The WGSL override that fixes where a pipeline's pixels take the bounce from (lighting.wgsl,
 /// `BOUNCE_SOURCE`).
@@ -474,6 +603,15 @@ pub struct LightingPass {
     /// `fs_transmitted` into the transmitted light's two layers of the lateral map, keeping
     /// the nearest surface in the map's z-buffer (the bounce pass after it shades only that).
     lateral: wgpu::RenderPipeline,
+    /// `fs_surface` into the texels' surfaces, keeping the nearest surface as `lateral` does;
+    /// `cs_transmitted` and `cs_bounce` then evaluate the transmitted light and the bounce
+    /// there, once per object (each built the first time a frame asks for it,
+    /// [`Self::prepare`]).
+    surface: wgpu::RenderPipeline,
+    transmitted_compute: Option<wgpu::ComputePipeline>,
+    bounce_compute: Option<wgpu::ComputePipeline>,
+    /// `cs_transmitted`'s layout: the frame's group, the object's, [`lateral_compute_layout`].
+    compute_layout: wgpu::PipelineLayout,
     /// `[first pass, later passes]`: `fs_bounce` into the map's bounce layer.
     bounce: [wgpu::RenderPipeline; 2],
     /// The lateral map's layer the bounce is gathered into ([`bounce_layer`]), if any.
@@ -533,6 +671,7 @@ impl LightingPass {
         });
         let bounce_layer = bounce_layer(lights);
         let key = LightingVariant::for_lights(lights);
+        let asked = *lights;
         let no_flux = crate::passes::bounce::dummy_views(device);
         let flux = shadow
             .flux
@@ -619,13 +758,7 @@ impl LightingPass {
         // of 22, the lighting pass unchanged (docs/performance.md).
         // Only `diffusion` reads the lateral map.
         // Each texel evaluates `diffusion` whole, the lateral taps included (LATERAL_SOURCE 2).
-        let diffusion = [
-            (
-                METHOD_CONSTANT,
-                f64::from(TransmittanceMethod::Diffusion.code()),
-            ),
-            (LATERAL_CONSTANT, 2.0),
-        ];
+        let diffusion = DIFFUSION_WHOLE;
         let lateral_pipeline = |fragment, targets, depth| {
             util::MeshPipeline {
                 label: "lateral",
@@ -642,6 +775,16 @@ impl LightingPass {
         };
         let pair: &[wgpu::TextureFormat] = &[LATERAL_FORMAT, LATERAL_FORMAT];
         let lateral = lateral_pipeline("fs_transmitted", pair, util::DepthTest::Nearest);
+        let surface = lateral_pipeline("fs_surface", pair, util::DepthTest::Nearest);
+        let compute_layout = util::pipeline_layout(
+            device,
+            "lateral compute",
+            &[
+                &frame_layout,
+                object_layout,
+                &lateral_compute_layout(device),
+            ],
+        );
         let bounce = [util::DepthTest::Nearest, util::DepthTest::Prepassed]
             .map(|depth| lateral_pipeline("fs_bounce", &[LATERAL_FORMAT], depth));
         let pipeline = lighting_pipeline(device, &layout, &module, key);
@@ -650,7 +793,7 @@ impl LightingPass {
         // depth-only pass first leaves the lighting shader one fragment per pixel.
         let prepass = util::depth_prepass_pipeline(device, &prepass_layout, &module, "vs_main");
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
-        Self {
+        let mut pass = Self {
             prepass,
             pipelines: vec![(key, pipeline)],
             taps: None,
@@ -659,6 +802,10 @@ impl LightingPass {
             module,
             layout,
             lateral,
+            surface,
+            transmitted_compute: None,
+            bounce_compute: None,
+            compute_layout,
             bounce,
             bounce_layer,
             no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
@@ -666,7 +813,9 @@ impl LightingPass {
             frame_bind_group,
             camera,
             lights,
-        }
+        };
+        pass.build_computes(device, &asked);
+        pass
     }
 
     /// Group 0 (see [`frame_layout`]): camera, lights, shadow maps, translucent shadow maps.
@@ -689,6 +838,37 @@ impl LightingPass {
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.bounce_layer = bounce_layer(lights);
         self.specialize(&ctx.device, LightingVariant::for_lights(lights));
+        self.build_computes(&ctx.device, lights);
+    }
+
+    /// Builds the compute evaluations of the lateral map that `lights` ask for and the pass
+    /// does not hold yet.
+    fn build_computes(&mut self, device: &wgpu::Device, lights: &LightsUniform) {
+        if !(LateralShape::for_lights(lights).compute && supports_lateral_compute(device)) {
+            return;
+        }
+        if transmitted_map(lights) && self.transmitted_compute.is_none() {
+            self.transmitted_compute = Some(self.build_compute(device, "cs_transmitted"));
+        }
+        if bounce_layer(lights).is_some() && self.bounce_compute.is_none() {
+            self.bounce_compute = Some(self.build_compute(device, "cs_bounce"));
+        }
+    }
+
+    /// The compute evaluation `entry` of lateral.wgsl, with `diffusion` whole, the lateral
+    /// taps included, as the lateral pass's fragment shader evaluates it (LATERAL_SOURCE 2).
+    fn build_compute(&self, device: &wgpu::Device, entry: &str) -> wgpu::ComputePipeline {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&self.compute_layout),
+            module: &self.module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &DIFFUSION_WHOLE,
+                ..Default::default()
+            },
+            cache: None,
+        })
     }
 
     /// Makes the lighting pipeline the one built for `key`, building it the first time it is
@@ -824,9 +1004,12 @@ impl LightingPass {
         timer.end(profiler, encoder);
     }
 
-    /// The lateral pass (timed "lateral"): `fs_transmitted` into the transmitted light's
-    /// layers where `transmitted`, writing the map's z-buffer; then the bounce pass (timed
-    /// "bounce", `fs_bounce`) into the bounce layer, testing against it.
+    /// The lateral pass (timed "lateral"): the transmitted light into its layers where
+    /// `transmitted`, writing the map's z-buffer; then the bounce pass (timed "bounce") into the
+    /// bounce layer, testing against it. Where the targets hold the texels' surfaces (and the
+    /// pipelines are built), the first raster pass records them (`fs_surface`) and compute
+    /// dispatches evaluate both (`cs_transmitted`, `cs_bounce`); otherwise the fragment shaders
+    /// do (`fs_transmitted`, `fs_bounce`).
     fn encode_lateral(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -836,26 +1019,86 @@ impl LightingPass {
         transmitted: bool,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
+        let transmitted = transmitted && lateral.layer_count >= TRANSMITTED_LAYERS;
+        let bounce = self.bounce_layer.filter(|&l| l < lateral.layer_count);
+        let transmitted_compute = self.transmitted_compute.as_ref().filter(|_| transmitted);
+        let bounce_compute = self.bounce_compute.as_ref().filter(|_| bounce.is_some());
+        let computed = lateral.surface.as_ref().filter(|_| {
+            (!transmitted || transmitted_compute.is_some())
+                && (bounce.is_none() || bounce_compute.is_some())
+        });
+        if let Some(surface) = computed {
+            // The surfaces' raster pass is timed with the first pass it serves.
+            let pass = MapPass {
+                timed: if transmitted { "lateral" } else { "bounce" },
+                targets: surface.targets.iter().collect(),
+                first: true,
+                pipeline: &self.surface,
+            };
+            self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
+            for (timed, pipeline) in [("lateral", transmitted_compute), ("bounce", bounce_compute)]
+            {
+                if let Some(pipeline) = pipeline {
+                    self.encode_compute(
+                        encoder, timed, lateral, surface, pipeline, objects, profiler,
+                    );
+                }
+            }
+            return;
+        }
         let mut first = true;
-        if transmitted && lateral.layer_count >= TRANSMITTED_LAYERS {
+        if transmitted {
             let pass = MapPass {
                 timed: "lateral",
-                layers: &[0, 1],
+                targets: lateral.layers[..TRANSMITTED_LAYERS as usize]
+                    .iter()
+                    .collect(),
                 first,
                 pipeline: &self.lateral,
             };
             self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
             first = false;
         }
-        if let Some(layer) = self.bounce_layer.filter(|&l| l < lateral.layer_count) {
+        if let Some(layer) = bounce {
             let pass = MapPass {
                 timed: "bounce",
-                layers: &[layer],
+                targets: vec![&lateral.layers[layer as usize]],
                 first,
                 pipeline: &self.bounce[usize::from(!first)],
             };
             self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
         }
+    }
+
+    /// A compute evaluation of lateral.wgsl once per object (timed as `timed`, summed with the
+    /// surfaces' raster pass where that is timed alike): each dispatch covers the whole map
+    /// and evaluates the texels whose surface is its object's.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_compute(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timed: &str,
+        lateral: &LateralTargets,
+        surface: &LateralSurface,
+        pipeline: &wgpu::ComputePipeline,
+        objects: &[GpuObject],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, timed, encoder);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(timed),
+                timestamp_writes: timer.compute_writes(),
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &self.frame_bind_group, &[]);
+            pass.set_bind_group(2, &surface.bind_group, &[]);
+            for o in objects {
+                pass.set_bind_group(1, &o.bind_group, &[]);
+                pass.dispatch_workgroups(lateral.width.div_ceil(8), lateral.height.div_ceil(8), 1);
+            }
+        }
+        timer.end(profiler, encoder);
     }
 
     /// One pass of [`MapPass`] over the lateral map.
@@ -871,13 +1114,10 @@ impl LightingPass {
         let timer = TimedPass::begin(profiler, map_pass.timed, encoder);
         {
             let attachments: Vec<_> = map_pass
-                .layers
+                .targets
                 .iter()
-                .map(|&l| {
-                    util::color_attachment(
-                        &lateral.layers[l as usize],
-                        wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    )
+                .map(|view| {
+                    util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
                 })
                 .collect();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -127,46 +127,6 @@ fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
     return select(-n, n, front);
 }
 
-struct LateralPair {
-    @location(0) first: vec4<f32>,
-    @location(1) second: vec4<f32>,
-};
-
-// The lateral pass: `diffusion`'s whole transmitted light, every light together, at each
-// texel of the reduced-resolution map (layer 0 the diffuse part, which joins the irradiance;
-// layer 1 the unscattered and singly scattered part, which joins the specular target;
-// a = the texel's view depth). What crosses skin changes over the medium's decay length, not
-// from pixel to pixel (the diffuse part is blurred by the profile after this anyway), so a
-// texel of a few millimetres serves a block of pixels, and the lighting pass reads one
-// interpolated value per pixel instead of running each light's thickness, LUT reads, taps
-// and single-scattering march. With the lateral taps alone in the map, `diffusion` cost
-// +65 % of `paper`'s lighting pass on an H100 at 1920x1080; with everything, +19 %
-// (docs/performance.md).
-@fragment
-fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
-    let n_vertex = oriented_normal(in, front);
-    let depth = dot(in.world - camera.position, camera.forward);
-    let v = normalize(camera.position - in.world);
-    var diffuse = vec3<f32>(0.0);
-    var ballistic = vec3<f32>(0.0);
-    let count = min(lights.count, MAX_LIGHTS);
-    for (var i = 0u; i < count; i++) {
-        let light = lights.lights[i];
-        if (light.first_layer < 0.0) {
-            continue;
-        }
-        let l = light_direction(light.kind, light.position, light.direction, in.world);
-        let radiance = light_radiance(light, in.world, l);
-        if (all(radiance <= vec3<f32>(0.0))) {
-            continue;
-        }
-        let t = transmittance(light, in.world, n_vertex, l, v, shadow_factor(light, in.world));
-        diffuse += radiance * t.diffuse;
-        ballistic += radiance * t.ballistic;
-    }
-    return LateralPair(vec4<f32>(diffuse, depth), vec4<f32>(ballistic, depth));
-}
-
 // The bounce pass (passes::bounce): the light the lit surfaces send each texel's surface
 // across the air, gathered from the flux pyramid once per texel of the lateral map's reduced
 // grid, as the lateral taps are: it changes over millimetres. a = the texel's view depth.

@@ -9,8 +9,8 @@ mod transmittance;
 pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{
-    DEFAULT_LATERAL_TEXEL_MM, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR, TransmittanceMethod,
-    TransmittanceSettings, lateral_downsample,
+    DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,
+    TransmittanceMethod, TransmittanceSettings, lateral_downsample,
 };
 
 use serde::{Deserialize, Serialize};
@@ -40,7 +40,7 @@ macro_rules! method_names {
     )*};
 }
 
-method_names!(SssMethod, SssFetch, TransmittanceMethod);
+method_names!(SssMethod, SssFetch, TransmittanceMethod, LateralPass);
 
 /// A setting out of range. `field` is its path below `[render]` as written in a scene file
 /// (`width`, `sss.samples`, `transmittance.normal_shrink`).

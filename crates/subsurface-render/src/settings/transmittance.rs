@@ -46,7 +46,7 @@ impl TransmittanceMethod {
     ];
 
     /// The number transmittance.wgsl switches on.
-    pub fn code(self) -> u32 {
+    pub const fn code(self) -> u32 {
         match self {
             TransmittanceMethod::Off => 0,
             TransmittanceMethod::Paper => 1,
@@ -66,6 +66,35 @@ impl TransmittanceMethod {
             TransmittanceMethod::SeedReport => "seed-report",
             TransmittanceMethod::Tsm => "tsm",
             TransmittanceMethod::Diffusion => "diffusion",
+        }
+    }
+}
+
+/// How the lateral pass evaluates `diffusion`'s map (`TransmittanceSettings::lateral_texel_mm`).
+/// Both give the same map (tests/transmittance.rs compares them); they differ in speed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LateralPass {
+    /// The map's raster pass only records each texel's surface (position, normal, object);
+    /// one compute dispatch per object then evaluates every light's transmitted light there.
+    /// The default: on the data-centre GPUs measured so far a fragment shader's arithmetic
+    /// ran many times slower than a compute shader's, and the evaluation is nearly all
+    /// arithmetic (docs/performance.md). Adapters without compute shaders and storage
+    /// textures evaluate in the fragment shader.
+    #[default]
+    Compute,
+    /// The raster pass's fragment shader evaluates it at each texel (no surface targets).
+    Fragment,
+}
+
+impl LateralPass {
+    pub const ALL: [LateralPass; 2] = [LateralPass::Compute, LateralPass::Fragment];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            LateralPass::Compute => "compute",
+            LateralPass::Fragment => "fragment",
         }
     }
 }
@@ -97,6 +126,9 @@ pub struct TransmittanceSettings {
     /// runs everything at each of its pixels). 0 runs it at every pixel inside the lighting
     /// pass.
     pub lateral_texel_mm: f32,
+    /// `diffusion`: where the lateral map is evaluated, `compute` (a compute shader on the
+    /// texels' surfaces) or `fragment` (the map's raster pass); the same map.
+    pub lateral_pass: LateralPass,
 }
 
 /// Default of [`TransmittanceSettings::lateral_texel_mm`].
@@ -141,6 +173,7 @@ impl Default for TransmittanceSettings {
             thickness_filter: 3,
             lateral_taps: subsurface_profile::lateral::DEFAULT_LATERAL_TAPS,
             lateral_texel_mm: DEFAULT_LATERAL_TEXEL_MM,
+            lateral_pass: LateralPass::default(),
         }
     }
 }
