@@ -435,6 +435,53 @@ pub fn lateral_taps_objects(
         .collect()
 }
 
+/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the
+/// scene's order, as [`upload_objects`] makes them): the pixels `[x0, y0, x1, y1)` its world
+/// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
+/// where they lie outside the view. The lateral map's compute evaluation dispatches over each
+/// object's box alone (passes::lighting, `LightingPass::set_object_rects`).
+pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 4]>> {
+    let camera = camera_uniform(scene, width, height);
+    let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+    let (w, h) = (width as f32, height as f32);
+    scene
+        .objects
+        .iter()
+        .filter(|o| !o.mesh.indices.is_empty())
+        .map(|o| {
+            let bounds = o.world_bounds();
+            if !in_view(view_proj, bounds) {
+                return None;
+            }
+            let (lo, hi) = bounds;
+            let mut min = glam::Vec2::splat(f32::INFINITY);
+            let mut max = glam::Vec2::splat(f32::NEG_INFINITY);
+            for k in 0..8 {
+                let c = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                let clip = view_proj * c.extend(1.0);
+                // A corner at or behind the eye projects nowhere useful: the whole frame.
+                if !clip.w.is_finite() || clip.w <= 1e-6 {
+                    return Some([0, 0, width, height]);
+                }
+                let px = glam::Vec2::new(
+                    (clip.x / clip.w * 0.5 + 0.5) * w,
+                    (0.5 - clip.y / clip.w * 0.5) * h,
+                );
+                (min, max) = (min.min(px), max.max(px));
+            }
+            let x0 = min.x.floor().clamp(0.0, w) as u32;
+            let y0 = min.y.floor().clamp(0.0, h) as u32;
+            let x1 = max.x.ceil().clamp(0.0, w) as u32;
+            let y1 = max.y.ceil().clamp(0.0, h) as u32;
+            (x1 > x0 && y1 > y0).then_some([x0, y0, x1, y1])
+        })
+        .collect()
+}
+
 /// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
 /// frustum plane has all eight corners outside it.
 fn in_view(view_proj: Mat4, (lo, hi): (Vec3, Vec3)) -> bool {
@@ -653,6 +700,48 @@ mod tests {
 
     fn downsample(scene: &Scene, settings: &RenderSettings, w: u32, h: u32) -> u32 {
         lateral_downsample(scene, settings, w, h)
+    }
+
+    /// Each object's box on screen holds every vertex of it (the lateral map's compute
+    /// dispatch covers only the box), is far smaller than the frame for the default scene's
+    /// hand and wedge, and is the whole frame for an object reaching behind the camera.
+    #[test]
+    fn screen_rects_hold_every_vertex() {
+        let mut scene = Scene::default_scene();
+        let (w, h) = (256, 192);
+        let camera = camera_uniform(&scene, w, h);
+        let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+        let rects = screen_rects(&scene, w, h);
+        assert_eq!(rects.len(), scene.objects.len());
+        for (o, rect) in scene.objects.iter().zip(&rects) {
+            let [x0, y0, x1, y1] = rect.expect("the default scene's objects are in view");
+            assert!(
+                ((x1 - x0) * (y1 - y0)) < w * h / 2,
+                "{:?}: box {x0},{y0}..{x1},{y1} of a {w}x{h} frame",
+                o.name
+            );
+            for v in &o.mesh.vertices {
+                let c = view_proj
+                    * o.transform
+                        .transform_point3(Vec3::from(v.position))
+                        .extend(1.0);
+                let px = (c.x / c.w * 0.5 + 0.5) * w as f32;
+                let py = (0.5 - c.y / c.w * 0.5) * h as f32;
+                assert!(
+                    px >= x0 as f32 && px <= x1 as f32 && py >= y0 as f32 && py <= y1 as f32,
+                    "{:?}: vertex at ({px}, {py}) outside {x0},{y0}..{x1},{y1}",
+                    o.name
+                );
+            }
+        }
+        // The camera inside the hand's bounds, looking down the fingers to the wrist (the
+        // bounds reach past the near plane in front and behind the eye).
+        let (lo, hi) = scene.objects[0].world_bounds();
+        let centre = (lo + hi) * 0.5;
+        scene.desc.camera.position = centre.to_array();
+        scene.desc.camera.target = (centre - Vec3::Y).to_array();
+        scene.desc.camera.up = [0.0, 0.0, 1.0];
+        assert_eq!(screen_rects(&scene, w, h)[0], Some([0, 0, w, h]));
     }
 
     /// The map's texels stay about `lateral_texel_mm` on the skin: twice the pixels, twice

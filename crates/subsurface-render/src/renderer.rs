@@ -290,6 +290,11 @@ impl Renderer {
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
         );
         lighting.set_taps_objects(device, taps_objects(scene, &options, &lights.uniform));
+        lighting.set_object_rects(
+            device,
+            &gpu_scene::screen_rects(scene, options.width(), options.height()),
+            lights.uniform.lateral_downsample,
+        );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
         let targets = LightingTargets::with_lateral(
             ctx,
@@ -454,6 +459,11 @@ impl Renderer {
         }
         self.lighting
             .set_taps_objects(&device, taps_objects(scene, options, &lights.uniform));
+        self.lighting.set_object_rects(
+            &device,
+            &gpu_scene::screen_rects(scene, options.width(), options.height()),
+            lights.uniform.lateral_downsample,
+        );
         let texture_signature = (settings, skin_flags(scene));
         if reuploaded || texture_signature != self.texture_signature {
             self.texture_space =

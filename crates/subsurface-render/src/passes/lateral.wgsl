@@ -12,8 +12,8 @@
 // Two ways to fill the map, the same numbers (`LateralPass` in the settings):
 // - `fs_transmitted` evaluates each texel in the raster pass's fragment shader;
 // - `fs_surface` only records each texel's surface, and `cs_transmitted`, dispatched once per
-//   object with that object's group 1, evaluates the texels it finds its index on (and
-//   `cs_bounce` the bounce, where the map has its layer). Data-centre
+//   object with that object's group 1 over the object's box on screen, evaluates the texels
+//   it finds its index on (and `cs_bounce` the bounce, where the map has its layer). Data-centre
 //   GPUs rasterise on a few of their units and ran a fragment shader's arithmetic many times
 //   slower than a compute shader's (docs/performance.md), and this evaluation is nearly all
 //   arithmetic.
@@ -74,37 +74,41 @@ fn fs_surface(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair
 @group(2) @binding(8) var surface_position: texture_2d<f32>;
 @group(2) @binding(9) var surface_normal: texture_2d<f32>;
 @group(2) @binding(10) var lateral_out: texture_storage_2d_array<rgba32float, write>;
+// The first texel of this dispatch (xy): each object's dispatch covers only its box on screen
+// (lighting.rs, `LightingPass::set_object_rects`), one entry per object at a dynamic offset.
+// Binding 1: the lighting pass's group 3 has the lateral map at 0.
+@group(3) @binding(1) var<uniform> dispatch_origin: vec4<u32>;
 
-// A texel's surface as `fs_surface` recorded it, for the dispatch of the object `object`.
+// A texel's surface as `fs_surface` recorded it, where it is this dispatch's object's.
 struct TexelSurface {
     texel: vec2<i32>,
     world: vec3<f32>,
     normal: vec3<f32>,
-    depth: f32,   // 0: nothing drawn here
-    own: bool,    // the surface is this dispatch's object's
+    depth: f32,
+    own: bool,    // in the map, drawn, and of this dispatch's object
 };
 
+// Texels of other objects and empty ones are left as they are: the pass cleared the map
+// before the dispatches (lighting.rs, `encode_lateral`), and each texel is its object's alone.
 fn texel_surface(id: vec3<u32>) -> TexelSurface {
-    let texel = vec2<i32>(id.xy);
+    let at = dispatch_origin.xy + id.xy;
+    let texel = vec2<i32>(at);
+    var s = TexelSurface(texel, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+    if (any(at >= textureDimensions(surface_position))) {
+        return s;
+    }
     let surface = textureLoad(surface_position, texel, 0);
     let normal = textureLoad(surface_normal, texel, 0);
-    let depth = select(0.0, surface.w, surface.w > 0.0);
-    return TexelSurface(texel, surface.xyz, normal.xyz, depth, depth > 0.0 && u32(normal.w) == object.index);
+    s.world = surface.xyz;
+    s.normal = normal.xyz;
+    s.depth = surface.w;
+    s.own = surface.w > 0.0 && u32(normal.w) == object.index;
+    return s;
 }
-
-// Where nothing was drawn every object's dispatch writes the same empty texel (a storage
-// texture has no clear without an optional feature; a store per texel and object).
 
 @compute @workgroup_size(8, 8)
 fn cs_transmitted(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id.xy >= textureDimensions(surface_position))) {
-        return;
-    }
     let s = texel_surface(id);
-    if (s.depth <= 0.0) {
-        textureStore(lateral_out, s.texel, 0, vec4<f32>(0.0));
-        textureStore(lateral_out, s.texel, 1, vec4<f32>(0.0));
-    }
     if (!s.own) {
         return;
     }
@@ -116,16 +120,10 @@ fn cs_transmitted(@builtin(global_invocation_id) id: vec3<u32>) {
 // `fs_bounce` (lighting.wgsl) on the recorded surfaces, into the map's bounce layer.
 @compute @workgroup_size(8, 8)
 fn cs_bounce(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id.xy >= textureDimensions(surface_position))) {
-        return;
-    }
     let s = texel_surface(id);
-    let layer = i32(lights.bounce_layer);
-    if (s.depth <= 0.0) {
-        textureStore(lateral_out, s.texel, layer, vec4<f32>(0.0));
-    }
     if (!s.own) {
         return;
     }
+    let layer = i32(lights.bounce_layer);
     textureStore(lateral_out, s.texel, layer, vec4<f32>(bounce_irradiance(s.world, s.normal), s.depth));
 }
