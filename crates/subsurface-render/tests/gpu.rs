@@ -562,59 +562,70 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
 }
 
 /// The lateral map from its compute evaluation (`fs_surface`, then `cs_transmitted` and
-/// `cs_bounce` once per object) against its fragment shaders (`fs_transmitted`, `fs_bounce`):
-/// the same function at the same points, so the same numbers. The wedge is made half as
-/// translucent as the hand, so a dispatch that evaluated another object's texels with its own
-/// uniform (the index test) would change them.
+/// `cs_bounce` once per object over its box) against its fragment shaders (`fs_transmitted`,
+/// `fs_bounce`): the same function at the same points, so the same numbers, for `diffusion`
+/// (the transmitted light's two layers and the bounce's) and for `paper` (the bounce's alone).
+/// The wedge is made half as translucent as the hand, so a dispatch that evaluated another
+/// object's texels with its own uniform (the index test) would change them; a box too small
+/// would leave texels empty.
 #[test]
 fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
-    use subsurface_render::LateralPass;
+    use subsurface_render::{LateralPass, TransmittanceMethod};
     let Some(ctx) = context() else { return };
     let mut scene = subsurface_render::Scene::default_scene();
     assert_eq!(scene.objects.len(), 2, "the hand and the wedge");
     scene.objects[1].material.translucency *= 0.5;
-    let layers = |pass: LateralPass| {
-        let mut opts = options(&scene, 256, 256);
-        opts.settings.transmittance.lateral_pass = pass;
-        let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
-        r.render().unwrap();
-        assert_eq!(
-            r.targets.lateral_computed(),
-            Some(pass == LateralPass::Compute),
-            "{pass}: evaluated elsewhere"
-        );
-        let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
-        assert_eq!(map.depth_or_array_layers(), 3);
-        (0..3)
-            .map(|l| {
-                let bytes = subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
-                subsurface_render::readback::decode_float(map.format(), &bytes).0
-            })
-            .collect::<Vec<_>>()
-    };
-    let (compute, fragment) = (layers(LateralPass::Compute), layers(LateralPass::Fragment));
-    for layer in 0..3 {
-        let (mut lit, mut drawn) = (0, 0);
-        for (a, b) in compute[layer]
-            .chunks_exact(4)
-            .zip(fragment[layer].chunks_exact(4))
-        {
-            assert!(a[3] == b[3], "layer {layer}: a texel's depth differs");
-            for c in 0..3 {
-                assert!(
-                    (a[c] - b[c]).abs() <= 1e-4 * b[c].abs() + 1e-9,
-                    "layer {layer}: {} computed, {} from the fragment shader",
-                    a[c],
-                    b[c]
+    for (method, layer_count) in [
+        (TransmittanceMethod::Diffusion, 3),
+        (TransmittanceMethod::Paper, 1),
+    ] {
+        let layers = |pass: LateralPass| {
+            let mut opts = options(&scene, 256, 256);
+            opts.settings.transmittance.method = method;
+            opts.settings.transmittance.lateral_pass = pass;
+            let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
+            r.render().unwrap();
+            if method == TransmittanceMethod::Diffusion {
+                assert_eq!(
+                    r.targets.lateral_computed(),
+                    Some(pass == LateralPass::Compute),
+                    "{pass}: evaluated elsewhere"
                 );
             }
-            drawn += usize::from(b[3] > 0.0);
-            lit += usize::from(b[0] > 0.0);
+            let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+            assert_eq!(map.depth_or_array_layers(), layer_count, "{method}");
+            (0..layer_count)
+                .map(|l| {
+                    let bytes =
+                        subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
+                    subsurface_render::readback::decode_float(map.format(), &bytes).0
+                })
+                .collect::<Vec<_>>()
+        };
+        let (compute, fragment) = (layers(LateralPass::Compute), layers(LateralPass::Fragment));
+        for (layer, (computed, fragment)) in compute.iter().zip(&fragment).enumerate() {
+            let (mut lit, mut drawn) = (0, 0);
+            for (a, b) in computed.chunks_exact(4).zip(fragment.chunks_exact(4)) {
+                assert!(
+                    a[3] == b[3],
+                    "{method}, layer {layer}: a texel's depth differs"
+                );
+                for c in 0..3 {
+                    assert!(
+                        (a[c] - b[c]).abs() <= 1e-4 * b[c].abs() + 1e-9,
+                        "{method}, layer {layer}: {} computed, {} from the fragment shader",
+                        a[c],
+                        b[c]
+                    );
+                }
+                drawn += usize::from(b[3] > 0.0);
+                lit += usize::from(b[0] > 0.0);
+            }
+            assert!(
+                drawn > 500 && lit > 50,
+                "{method}, layer {layer}: {drawn} texels drawn, {lit} lit"
+            );
         }
-        assert!(
-            drawn > 500 && lit > 50,
-            "layer {layer}: {drawn} texels drawn, {lit} lit"
-        );
     }
 }
 

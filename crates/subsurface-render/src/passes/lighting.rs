@@ -232,8 +232,8 @@ pub fn supports_lateral_compute(device: &wgpu::Device) -> bool {
 pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl LateralTargets {
-    /// `compute`: with the surfaces the transmitted light's compute evaluation reads (ignored
-    /// where the adapter cannot run it, [`supports_lateral_compute`]).
+    /// `compute`: with the surfaces the compute evaluations of the transmitted light and the
+    /// bounce read (ignored where the adapter cannot run them, [`supports_lateral_compute`]).
     pub fn new(
         ctx: &GpuContext,
         width: u32,
@@ -323,7 +323,7 @@ impl LateralTargets {
         }
     }
 
-    /// Whether the transmitted light is evaluated in a compute shader on the texels' surfaces.
+    /// Whether compute shaders evaluate the map on the texels' surfaces.
     pub fn computed(&self) -> bool {
         self.surface.is_some()
     }
