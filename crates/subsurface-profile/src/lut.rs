@@ -100,7 +100,7 @@ impl TransmittanceLut {
     /// exact transport ([`crate::slab_transport`], adding-doubling), as a factor of `albedo`:
     /// `T(s) = T_ms(s) / albedo`, so that the lighting pass's `albedo * T(s) * E` is the
     /// slab's transmitted `T_ms(s) * E`. `albedo` is the medium's diffuse albedo from the same
-    /// solver, [`TransportTable::albedo`]. The renderer adds single scattering (along the view
+    /// solver, [`crate::TransportTable::albedo`]. The renderer adds single scattering (along the view
     /// ray) and the unscattered beam (a narrow lobe) on their own, with their directions.
     /// Unlike diffusion's multipole this holds at low reduced albedo too (through 10 mm of
     /// skin1: 1.8x the multipole's green and 13x its blue, as a path tracer shows), and it

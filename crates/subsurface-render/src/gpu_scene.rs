@@ -361,7 +361,7 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
 
 /// The lateral map's reduction for `scene` at `width` x `height` with `settings`
 /// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
-/// the translucent object in view nearest in those terms ([`skin_pixel_mm`]), so that the
+/// the translucent object in view nearest in those terms (`skin_pixel_mm`), so that the
 /// map's texels are the same millimetres at any resolution and zoom (a farther object whose
 /// texels come out too coarse gathers its own taps, [`lateral_taps_objects`]). 1 (no
 /// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its

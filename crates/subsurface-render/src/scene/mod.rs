@@ -1,6 +1,6 @@
 //! Scene description (TOML, see `docs/scene-format.md`) and scene loading.
 //!
-//! [`SceneDesc`] is the raw, serialisable description ([`desc`], checked by [`validate`]);
+//! [`SceneDesc`] is the raw, serialisable description (`desc`, checked by `validate`);
 //! [`Scene`] is the loaded scene with meshes and textures decoded, ready for upload.
 
 mod desc;

@@ -558,7 +558,7 @@ pub fn gaussian6(
 
 /// Hable et al. 2009's single 2-D pass with the 13 jittered taps of 001_*,
 /// Table 1, whose positions are in mm on the skin and whose weights are
-/// normalised per channel ([`hable13_kernel`]; the raw table sums to 0.9977,
+/// normalised per channel ([`crate::kernel::hable13_kernel`]; the raw table sums to 0.9977,
 /// 1.0494, 0.9996). `out = w_0 * colorM + sum_{i = 1..13} w_i * tap(c + (X_i, Y_i) * px_per_mm)`,
 /// in table order, with `+Y` down the image. Each pixel uses its profile's row
 /// `kernels[profile].hable13` (for skin, that table itself).
