@@ -456,12 +456,7 @@ pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 
             let (lo, hi) = bounds;
             let mut min = glam::Vec2::splat(f32::INFINITY);
             let mut max = glam::Vec2::splat(f32::NEG_INFINITY);
-            for k in 0..8 {
-                let c = Vec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
+            for c in crate::scene::box_corners(lo, hi) {
                 let clip = view_proj * c.extend(1.0);
                 // A corner at or behind the eye projects nowhere useful: the whole frame.
                 if !clip.w.is_finite() || clip.w <= 1e-6 {
@@ -485,16 +480,7 @@ pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 
 /// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
 /// frustum plane has all eight corners outside it.
 fn in_view(view_proj: Mat4, (lo, hi): (Vec3, Vec3)) -> bool {
-    let corners: Vec<glam::Vec4> = (0..8)
-        .map(|k| {
-            let c = Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
-            view_proj * c.extend(1.0)
-        })
-        .collect();
+    let corners = crate::scene::box_corners(lo, hi).map(|c| view_proj * c.extend(1.0));
     let outside = |f: &dyn Fn(&glam::Vec4) -> bool| corners.iter().all(f);
     !(outside(&|c| c.x < -c.w)
         || outside(&|c| c.x > c.w)

@@ -56,17 +56,23 @@ impl Object {
     pub fn world_bounds(&self) -> (Vec3, Vec3) {
         let (lo, hi) = self.mesh.bounds();
         let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for k in 0..8 {
-            let c = Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
+        for c in box_corners(lo, hi) {
             let p = self.transform.transform_point3(c);
             out = (out.0.min(p), out.1.max(p));
         }
         out
     }
+}
+
+/// The eight corners of the axis-aligned box `(lo, hi)`.
+pub(crate) fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|k| {
+        Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
 }
 
 /// Reads and decodes an image file as RGBA8.
