@@ -222,18 +222,13 @@ impl ObjectRects {
     }
 }
 
-/// Whether `device` can evaluate the lateral map in a compute shader (storage textures).
-pub fn supports_lateral_compute(device: &wgpu::Device) -> bool {
-    util::supports_compute_storage(device)
-}
-
 /// 32-bit depth beside the light: the lighting pass compares it with its own pixel's to the
 /// fraction of a millimetre, at any distance. Read with loads (no filtering needed).
 pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 impl LateralTargets {
     /// `compute`: with the surfaces the compute evaluations of the transmitted light and the
-    /// bounce read (ignored where the adapter cannot run them, [`supports_lateral_compute`]).
+    /// bounce read (ignored where the adapter cannot run them, `util::supports_compute_storage`).
     pub fn new(
         ctx: &GpuContext,
         width: u32,
@@ -248,7 +243,7 @@ impl LateralTargets {
         let layer_count = layers.clamp(1, TRANSMITTED_LAYERS + 1);
         let (w, h) = (width.div_ceil(downsample), height.div_ceil(downsample));
         let compute_asked = compute;
-        let compute = compute && supports_lateral_compute(device);
+        let compute = compute && util::supports_compute_storage(device);
         let storage = if compute {
             wgpu::TextureUsages::STORAGE_BINDING
         } else {
@@ -981,7 +976,7 @@ impl LightingPass {
     /// Builds the compute evaluations of the lateral map that `lights` ask for and the pass
     /// does not hold yet.
     fn build_computes(&mut self, device: &wgpu::Device, lights: &LightsUniform) {
-        if !(LateralShape::for_lights(lights).compute && supports_lateral_compute(device)) {
+        if !(LateralShape::for_lights(lights).compute && util::supports_compute_storage(device)) {
             return;
         }
         if transmitted_map(lights) && self.transmitted_compute.is_none() {
