@@ -78,7 +78,7 @@ mod shader_tests {
         let variants = codes
             .into_iter()
             .chain([255])
-            .flat_map(|code| [0, 1, 2, 255].map(|source| (code, source)));
+            .flat_map(|code| [0, 1, 2, 3, 255].map(|source| (code, source)));
         for (code, source) in variants {
             let mut constants = naga::back::PipelineConstants::default();
             constants.insert("TRANSMITTANCE_METHOD".into(), f64::from(code));
@@ -91,6 +91,7 @@ mod shader_tests {
                 (naga::ShaderStage::Fragment, "fs_surface"),
                 (naga::ShaderStage::Compute, "cs_transmitted"),
                 (naga::ShaderStage::Compute, "cs_bounce"),
+                (naga::ShaderStage::Compute, "cs_clear"),
             ];
             for (shader_stage, entry) in entries {
                 let stage = Some((shader_stage, entry));

@@ -561,13 +561,18 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
     assert!(bounced > 100, "only {bounced} texels received a bounce");
 }
 
-/// The lateral map from its compute evaluation (`fs_surface`, then `cs_transmitted` and
-/// `cs_bounce` once per object over its box) against its fragment shaders (`fs_transmitted`,
-/// `fs_bounce`): the same function at the same points, so the same numbers, for `diffusion`
-/// (the transmitted light's two layers and the bounce's) and for `paper` (the bounce's alone).
-/// The wedge is made half as translucent as the hand, so a dispatch that evaluated another
-/// object's texels with its own uniform (the index test) would change them; a box too small
-/// would leave texels empty.
+/// The lateral map from its compute evaluation (`fs_surface`, then `cs_clear`, and
+/// `cs_transmitted` and `cs_bounce` once per object over its box) against its fragment shaders
+/// (`fs_transmitted`, `fs_bounce`): the same function at the same points, so the same numbers,
+/// for `diffusion` (the transmitted light's two layers and the bounce's) and for `paper` (the
+/// bounce's alone).
+/// - The wedge is made half as translucent as the hand, so a dispatch that evaluated another
+///   object's texels with its own uniform (the index test) would change them; a box too small
+///   would leave texels empty.
+/// - Each renderer draws a second frame from another camera, so texels the first frame's boxes
+///   wrote and the second's do not cover must have been cleared.
+/// - With all eight lights, each light has one invocation of a texel's eight
+///   (`cs_transmitted`'s lanes), where with the scene's two it has four, which share its taps.
 #[test]
 fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
     use subsurface_render::{LateralPass, TransmittanceMethod};
@@ -575,56 +580,78 @@ fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
     let mut scene = subsurface_render::Scene::default_scene();
     assert_eq!(scene.objects.len(), 2, "the hand and the wedge");
     scene.objects[1].material.translucency *= 0.5;
-    for (method, layer_count) in [
-        (TransmittanceMethod::Diffusion, 3),
-        (TransmittanceMethod::Paper, 1),
+    let mut eight = scene.clone();
+    let lights = eight.desc.lights.clone();
+    eight.desc.lights = (0..subsurface_render::uniforms::MAX_LIGHTS)
+        .map(|k| {
+            let mut light = lights[k % 2].clone();
+            // Apart, so that each light's map and taps differ: light k is its scene light moved
+            // a little sideways, each at its own brightness.
+            light.position[0] += 0.01 * k as f32;
+            light.intensity *= 1.0 + 0.25 * k as f32;
+            light.shadow_map_size = 256;
+            light
+        })
+        .collect();
+    for (scene, method, layer_count) in [
+        (&scene, TransmittanceMethod::Diffusion, 3),
+        (&scene, TransmittanceMethod::Paper, 1),
+        (&eight, TransmittanceMethod::Diffusion, 3),
     ] {
-        let layers = |pass: LateralPass| {
-            let mut opts = options(&scene, 256, 256);
+        let lights = scene.desc.lights.len();
+        let mut moved = scene.clone();
+        moved.desc.camera.position[0] += 0.15;
+        let frames = |pass: LateralPass| {
+            let mut opts = options(scene, 256, 256);
             opts.settings.transmittance.method = method;
             opts.settings.transmittance.lateral_pass = pass;
-            let mut r = Renderer::new(&ctx, &scene, opts).unwrap();
-            r.render().unwrap();
-            if method == TransmittanceMethod::Diffusion {
-                assert_eq!(
-                    r.targets.lateral_computed(),
-                    Some(pass == LateralPass::Compute),
-                    "{pass}: evaluated elsewhere"
-                );
-            }
-            let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
-            assert_eq!(map.depth_or_array_layers(), layer_count, "{method}");
-            (0..layer_count)
-                .map(|l| {
-                    let bytes =
-                        subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
-                    subsurface_render::readback::decode_float(map.format(), &bytes).0
-                })
-                .collect::<Vec<_>>()
-        };
-        let (compute, fragment) = (layers(LateralPass::Compute), layers(LateralPass::Fragment));
-        for (layer, (computed, fragment)) in compute.iter().zip(&fragment).enumerate() {
-            let (mut lit, mut drawn) = (0, 0);
-            for (a, b) in computed.chunks_exact(4).zip(fragment.chunks_exact(4)) {
-                assert!(
-                    a[3] == b[3],
-                    "{method}, layer {layer}: a texel's depth differs"
-                );
-                for c in 0..3 {
-                    assert!(
-                        (a[c] - b[c]).abs() <= 1e-4 * b[c].abs() + 1e-9,
-                        "{method}, layer {layer}: {} computed, {} from the fragment shader",
-                        a[c],
-                        b[c]
+            let mut r = Renderer::new(&ctx, scene, opts.clone()).unwrap();
+            let read = |r: &mut Renderer| {
+                r.render().unwrap();
+                if method == TransmittanceMethod::Diffusion {
+                    assert_eq!(
+                        r.targets.lateral_computed(),
+                        Some(pass == LateralPass::Compute),
+                        "{pass}: evaluated elsewhere"
                     );
                 }
-                drawn += usize::from(b[3] > 0.0);
-                lit += usize::from(b[0] > 0.0);
+                let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+                assert_eq!(map.depth_or_array_layers(), layer_count, "{method}");
+                (0..layer_count)
+                    .map(|l| {
+                        let bytes =
+                            subsurface_render::readback::read_texture_layer(&ctx, map, l).unwrap();
+                        subsurface_render::readback::decode_float(map.format(), &bytes).0
+                    })
+                    .collect::<Vec<_>>()
+            };
+            let first = read(&mut r);
+            r.update(&moved, &opts).unwrap();
+            [first, read(&mut r)]
+        };
+        let (compute, fragment) = (frames(LateralPass::Compute), frames(LateralPass::Fragment));
+        for (frame, (compute, fragment)) in compute.iter().zip(&fragment).enumerate() {
+            for (layer, (computed, fragment)) in compute.iter().zip(fragment).enumerate() {
+                let at = format!("{method}, {lights} lights, frame {frame}, layer {layer}");
+                let (mut lit, mut drawn) = (0, 0);
+                for (a, b) in computed.chunks_exact(4).zip(fragment.chunks_exact(4)) {
+                    assert!(a[3] == b[3], "{at}: a texel's depth differs");
+                    for c in 0..3 {
+                        assert!(
+                            (a[c] - b[c]).abs() <= 1e-4 * b[c].abs() + 1e-9,
+                            "{at}: {} computed, {} from the fragment shader",
+                            a[c],
+                            b[c]
+                        );
+                    }
+                    drawn += usize::from(b[3] > 0.0);
+                    lit += usize::from(b[0] > 0.0);
+                }
+                assert!(
+                    drawn > 500 && lit > 50,
+                    "{at}: {drawn} texels drawn, {lit} lit"
+                );
             }
-            assert!(
-                drawn > 500 && lit > 50,
-                "{method}, layer {layer}: {drawn} texels drawn, {lit} lit"
-            );
         }
     }
 }

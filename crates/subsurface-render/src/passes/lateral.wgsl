@@ -11,12 +11,11 @@
 //
 // Two ways to fill the map, the same numbers (`LateralPass` in the settings):
 // - `fs_transmitted` evaluates each texel in the raster pass's fragment shader;
-// - `fs_surface` only records each texel's surface, and `cs_transmitted`, dispatched once per
-//   object with that object's group 1 over the object's box on screen, evaluates the texels
-//   it finds its index on (and `cs_bounce` the bounce, where the map has its layer). Data-centre
-//   GPUs rasterise on a few of their units and ran a fragment shader's arithmetic many times
-//   slower than a compute shader's (docs/performance.md), and this evaluation is nearly all
-//   arithmetic.
+// - `fs_surface` only records each texel's surface; `cs_clear` empties the map, then
+//   `cs_transmitted`, dispatched once per object with that object's group 1 over the object's
+//   box on screen, evaluates the texels it finds its index on, each over several invocations
+//   (and `cs_bounce` the bounce, where the map has its layer). On an H200 this took the default
+//   scene's map in a third of the fragment shader's time (docs/performance.md).
 // Part of lighting.rs's module: it calls lighting.wgsl's and transmittance.wgsl's functions.
 
 struct LateralPair {
@@ -28,27 +27,33 @@ struct LateralPair {
 // camera's side), every shadowed light's radiance summed.
 fn transmitted_light(world: vec3<f32>, n_vertex: vec3<f32>) -> Transmitted {
     var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+    let count = min(lights.count, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let t = light_transmitted(i, world, n_vertex);
+        out.diffuse += t.diffuse;
+        out.ballistic += t.ballistic;
+    }
+    return out;
+}
+
+// Light `i`'s part of `transmitted_light`, its radiance included.
+fn light_transmitted(i: u32, world: vec3<f32>, n_vertex: vec3<f32>) -> Transmitted {
+    var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
     // Opaque objects keep only their depth in the map (the lighting pass's read tests it);
     // `light_entry` would find no thickness for any light.
-    if (object.translucency <= 0.0) {
+    let light = lights.lights[i];
+    if (object.translucency <= 0.0 || light.first_layer < 0.0) {
         return out;
     }
     let v = normalize(camera.position - world);
-    let count = min(lights.count, MAX_LIGHTS);
-    for (var i = 0u; i < count; i++) {
-        let light = lights.lights[i];
-        if (light.first_layer < 0.0) {
-            continue;
-        }
-        let l = light_direction(light.kind, light.position, light.direction, world);
-        let radiance = light_radiance(light, world, l);
-        if (all(radiance <= vec3<f32>(0.0))) {
-            continue;
-        }
-        let t = transmittance(light, world, n_vertex, l, v, shadow_factor(light, world));
-        out.diffuse += radiance * t.diffuse;
-        out.ballistic += radiance * t.ballistic;
+    let l = light_direction(light.kind, light.position, light.direction, world);
+    let radiance = light_radiance(light, world, l);
+    if (all(radiance <= vec3<f32>(0.0))) {
+        return out;
     }
+    let t = transmittance(light, world, n_vertex, l, v, shadow_factor(light, world));
+    out.diffuse = radiance * t.diffuse;
+    out.ballistic = radiance * t.ballistic;
     return out;
 }
 
@@ -106,15 +111,93 @@ fn texel_surface(id: vec3<u32>) -> TexelSurface {
     return s;
 }
 
-@compute @workgroup_size(8, 8)
-fn cs_transmitted(@builtin(global_invocation_id) id: vec3<u32>) {
-    let s = texel_surface(id);
-    if (!s.own) {
+// `cs_transmitted` spreads each texel over TEXEL_LANES invocations (at least MAX_LIGHTS), a
+// workgroup over a BLOCK_WIDTH x BLOCK_HEIGHT block of texels. The map has a few thousand
+// texels, too few to keep a GPU's units busy one invocation each, and each texel's light is a
+// chain of dependent loads (per light: its thickness's N x N shadow-map texels, 12 lateral
+// taps of a shadow-map texel and a LUT row each, the rest of `transmittance`) that one
+// invocation waits out load after load: on an H200 the default scene's 160 x 90 texels took
+// 0.10 ms, whatever the map's size. Spread, one lane per light first finds the light's entry,
+// then the lanes of each light take a stride of its lateral taps, then one lane per light
+// evaluates the rest with the entry and the taps' sum given (LATERAL_SOURCE 3), and the first
+// lane adds the lights.
+override TEXEL_LANES: u32 = 8u;
+override BLOCK_WIDTH: u32 = 4u;
+override BLOCK_HEIGHT: u32 = 2u;
+var<workgroup> lane_entry: array<vec4<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+var<workgroup> lane_taps: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+var<workgroup> lane_diffuse: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+var<workgroup> lane_ballistic: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+
+@compute @workgroup_size(BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES)
+fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    let slot = index / TEXEL_LANES;
+    let lane = index % TEXEL_LANES;
+    let block = vec2<u32>(BLOCK_WIDTH, BLOCK_HEIGHT);
+    let s = texel_surface(vec3<u32>(group.xy * block + vec2<u32>(slot % BLOCK_WIDTH, slot / BLOCK_WIDTH), 0u));
+    let count = min(lights.count, MAX_LIGHTS);
+    let first_lane = slot * TEXEL_LANES;
+    let translucent = s.own && object.translucency > 0.0;
+    // The barriers need every invocation: those without work store zeros instead of leaving.
+    // Lane i: light i's entry.
+    var entry = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    if (translucent && lane < count && lights.lights[lane].first_layer >= 0.0) {
+        let e = light_entry(lights.lights[lane], s.world, s.normal);
+        entry = vec4<f32>(e.normal, e.s_mm);
+    }
+    lane_entry[index] = entry;
+    workgroupBarrier();
+    // Lane i * per_light + j: light i's taps j, j + per_light, ...
+    let per_light = TEXEL_LANES / max(count, 1u);
+    let light_index = lane / per_light;
+    var taps = vec3<f32>(0.0);
+    if (translucent && light_index < count && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
+        let s_mm = lane_entry[first_lane + light_index].w;
+        if (s_mm >= 0.0) {
+            let light = lights.lights[light_index];
+            let l = light_direction(light.kind, light.position, light.direction, s.world);
+            taps = lateral_tap_sum(light, s.world, s.normal, l, s_mm, lane % per_light, per_light);
+        }
+    }
+    lane_taps[index] = taps;
+    workgroupBarrier();
+    // Lane i: the rest of light i's transmittance.
+    var t = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+    if (translucent && lane < count) {
+        var sum = vec3<f32>(0.0);
+        for (var k = 0u; k < per_light; k++) {
+            sum += lane_taps[first_lane + lane * per_light + k];
+        }
+        let e = lane_entry[index];
+        given_entry = Entry(e.w, e.xyz);
+        given_lateral = sum;
+        t = light_transmitted(lane, s.world, s.normal);
+    }
+    lane_diffuse[index] = t.diffuse;
+    lane_ballistic[index] = t.ballistic;
+    workgroupBarrier();
+    if (!s.own || lane != 0u) {
         return;
     }
-    let t = transmitted_light(s.world, s.normal);
-    textureStore(lateral_out, s.texel, 0, vec4<f32>(t.diffuse, s.depth));
-    textureStore(lateral_out, s.texel, 1, vec4<f32>(t.ballistic, s.depth));
+    var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+    for (var k = 0u; k < count; k++) {
+        out.diffuse += lane_diffuse[first_lane + k];
+        out.ballistic += lane_ballistic[first_lane + k];
+    }
+    textureStore(lateral_out, s.texel, 0, vec4<f32>(out.diffuse, s.depth));
+    textureStore(lateral_out, s.texel, 1, vec4<f32>(out.ballistic, s.depth));
+}
+
+// Every layer of the map to nothing (depth 0), before the objects' dispatches write their
+// own texels: one dispatch in the compute pass instead of render passes that only clear.
+@compute @workgroup_size(8, 8)
+fn cs_clear(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id.xy >= textureDimensions(lateral_out))) {
+        return;
+    }
+    for (var layer = 0u; layer < textureNumLayers(lateral_out); layer++) {
+        textureStore(lateral_out, vec2<i32>(id.xy), i32(layer), vec4<f32>(0.0));
+    }
 }
 
 // `fs_bounce` (lighting.wgsl) on the recorded surfaces, into the map's bounce layer.

@@ -203,11 +203,17 @@ impl ObjectRects {
         }
     }
 
+    /// The dynamic offset of the entry after the objects': origin (0, 0), for dispatches over
+    /// the whole map.
+    fn whole_offset(&self) -> u32 {
+        self.rects.len() as u32 * self.stride
+    }
+
     /// Object `k`'s dispatch on a `w` x `h` map of reduction `downsample`: the dynamic offset
     /// of its origin and its size in texels; the whole map where it has no box (or the boxes
     /// were made for another reduction), `None` where it is out of view.
     fn dispatch(&self, k: usize, downsample: u32, w: u32, h: u32) -> Option<(u32, u32, u32)> {
-        let whole = (self.rects.len() as u32 * self.stride, w, h);
+        let whole = (self.whole_offset(), w, h);
         if downsample != self.downsample {
             return Some(whole);
         }
@@ -586,34 +592,13 @@ struct MapPass<'a> {
     pipeline: &'a wgpu::RenderPipeline,
 }
 
-/// Render passes that only clear `views` to zero (timed as `timed`), two at a time: two of the
-/// map's Rgba32Float layers are the 32 bytes per sample every adapter allows.
-fn encode_clear(
-    encoder: &mut wgpu::CommandEncoder,
-    views: &[&wgpu::TextureView],
-    timed: &str,
-    profiler: Option<&wgpu_profiler::GpuProfiler>,
-) {
-    for pair in views.chunks(2) {
-        let timer = TimedPass::begin(profiler, timed, encoder);
-        {
-            let attachments: Vec<_> = pair
-                .iter()
-                .map(|view| {
-                    util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
-                })
-                .collect();
-            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("lateral clear"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-        }
-        timer.end(profiler, encoder);
-    }
+/// One compute pass of [`LightingPass::encode_compute`]: `pipeline` once per object, each
+/// workgroup over `block` texels (across, down), after `clear` over the whole map where given.
+struct Compute<'a> {
+    timed: &'a str,
+    clear: Option<&'a wgpu::ComputePipeline>,
+    pipeline: &'a wgpu::ComputePipeline,
+    block: [u32; 2],
 }
 
 /// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
@@ -627,6 +612,29 @@ const DIFFUSION_WHOLE: [(&str, f64); 2] = [
     ),
     (LATERAL_CONSTANT, 2.0),
 ];
+
+/// `cs_transmitted`'s overrides: as [`DIFFUSION_WHOLE`], with the taps' sum gathered over the
+/// texel's invocations before `transmittance` (LATERAL_SOURCE 3).
+const DIFFUSION_SPREAD: [(&str, f64); 2] = [
+    (
+        METHOD_CONSTANT,
+        TransmittanceMethod::Diffusion.code() as f64,
+    ),
+    (LATERAL_CONSTANT, 3.0),
+];
+
+/// `cs_transmitted`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`), and the block of
+/// texels (across, down) a workgroup of 64 takes. On an H200, eight lanes took the default
+/// scene's map (two lights) in half the time of one (1280x720: 0.051 ms against 0.106) and
+/// the head's (three lights, a larger map) in two thirds; sixteen gained 0.002 ms on the first
+/// and lost 0.013 on the second (docs/performance.md).
+const TEXEL_LANES: u32 = 8;
+const SPREAD_BLOCK: [u32; 2] = [4, 2];
+// Each light needs a lane of its own for its entry and the rest of its transmittance.
+const _: () = assert!(TEXEL_LANES as usize >= crate::uniforms::MAX_LIGHTS);
+/// Texels per workgroup of lateral.wgsl's other compute shaders, across and down: 8 x 8,
+/// one invocation each.
+const TEXEL_BLOCK: u32 = 8;
 
 /// The WGSL override that fixes where a pipeline's pixels take the bounce from (lighting.wgsl,
 /// `BOUNCE_SOURCE`).
@@ -737,6 +745,8 @@ pub struct LightingPass {
     surface: wgpu::RenderPipeline,
     transmitted_compute: Option<wgpu::ComputePipeline>,
     bounce_compute: Option<wgpu::ComputePipeline>,
+    /// `cs_clear`: every layer of the map to nothing, first in the frame's first compute pass.
+    clear_compute: Option<wgpu::ComputePipeline>,
     /// `cs_transmitted`'s layout: the frame's group, the object's, [`lateral_compute_layout`],
     /// [`dispatch_origin_layout`].
     compute_layout: wgpu::PipelineLayout,
@@ -936,6 +946,7 @@ impl LightingPass {
             surface,
             transmitted_compute: None,
             bounce_compute: None,
+            clear_compute: None,
             compute_layout,
             object_rects: ObjectRects::new(device, &[], 1),
             bounce,
@@ -980,23 +991,45 @@ impl LightingPass {
             return;
         }
         if transmitted_map(lights) && self.transmitted_compute.is_none() {
-            self.transmitted_compute = Some(self.build_compute(device, "cs_transmitted"));
+            let [width, height] = SPREAD_BLOCK;
+            let constants = [
+                DIFFUSION_SPREAD.as_slice(),
+                &[
+                    ("TEXEL_LANES", f64::from(TEXEL_LANES)),
+                    ("BLOCK_WIDTH", f64::from(width)),
+                    ("BLOCK_HEIGHT", f64::from(height)),
+                ],
+            ]
+            .concat();
+            self.transmitted_compute =
+                Some(self.build_compute(device, "cs_transmitted", &constants));
         }
         if bounce_layer(lights).is_some() && self.bounce_compute.is_none() {
-            self.bounce_compute = Some(self.build_compute(device, "cs_bounce"));
+            self.bounce_compute = Some(self.build_compute(device, "cs_bounce", &DIFFUSION_WHOLE));
+        }
+        if self.clear_compute.is_none()
+            && (self.transmitted_compute.is_some() || self.bounce_compute.is_some())
+        {
+            self.clear_compute = Some(self.build_compute(device, "cs_clear", &DIFFUSION_WHOLE));
         }
     }
 
-    /// The compute evaluation `entry` of lateral.wgsl, with `diffusion` whole, the lateral
-    /// taps included, as the lateral pass's fragment shader evaluates it (LATERAL_SOURCE 2).
-    fn build_compute(&self, device: &wgpu::Device, entry: &str) -> wgpu::ComputePipeline {
+    /// The compute evaluation `entry` of lateral.wgsl with the overrides `constants`:
+    /// `diffusion` whole, the lateral taps included, as the lateral pass's fragment shader
+    /// evaluates it (LATERAL_SOURCE 2, or 3 where the taps are spread over lanes).
+    fn build_compute(
+        &self,
+        device: &wgpu::Device,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout: Some(&self.compute_layout),
             module: &self.module,
             entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &DIFFUSION_WHOLE,
+                constants,
                 ..Default::default()
             },
             cache: None,
@@ -1173,7 +1206,8 @@ impl LightingPass {
         let transmitted_compute = self.transmitted_compute.as_ref().filter(|_| transmitted);
         let bounce_compute = self.bounce_compute.as_ref().filter(|_| bounce.is_some());
         let computed = lateral.surface.as_ref().filter(|_| {
-            (!transmitted || transmitted_compute.is_some())
+            self.clear_compute.is_some()
+                && (!transmitted || transmitted_compute.is_some())
                 && (bounce.is_none() || bounce_compute.is_some())
         });
         if let Some(surface) = computed {
@@ -1186,21 +1220,22 @@ impl LightingPass {
             };
             self.encode_map_pass(encoder, lateral, &pass, objects, maps, profiler);
             // Each object's dispatch writes only its own texels, within its box: the rest of
-            // the layers must read as nothing (depth 0).
-            let mut cleared: Vec<&wgpu::TextureView> = Vec::new();
-            if transmitted {
-                cleared.extend(&lateral.layers[..TRANSMITTED_LAYERS as usize]);
-            }
-            if let Some(layer) = bounce {
-                cleared.push(&lateral.layers[layer as usize]);
-            }
-            encode_clear(encoder, &cleared, pass.timed, profiler);
-            for (timed, pipeline) in [("lateral", transmitted_compute), ("bounce", bounce_compute)]
-            {
+            // the map must read as nothing (depth 0), which the first compute pass clears.
+            // Render passes that only cleared its layers took 0.02 ms more on an H200 at
+            // 1920x1080 (docs/performance.md).
+            let mut clear = self.clear_compute.as_ref();
+            for (timed, pipeline, block) in [
+                ("lateral", transmitted_compute, SPREAD_BLOCK),
+                ("bounce", bounce_compute, [TEXEL_BLOCK; 2]),
+            ] {
                 if let Some(pipeline) = pipeline {
-                    self.encode_compute(
-                        encoder, timed, lateral, surface, pipeline, objects, profiler,
-                    );
+                    let compute = Compute {
+                        timed,
+                        clear: clear.take(),
+                        pipeline,
+                        block,
+                    };
+                    self.encode_compute(encoder, &compute, lateral, surface, objects, profiler);
                 }
             }
             return;
@@ -1229,29 +1264,42 @@ impl LightingPass {
         }
     }
 
-    /// A compute evaluation of lateral.wgsl once per object (timed as `timed`, summed with the
-    /// surfaces' raster pass where that is timed alike): each dispatch covers the whole map
-    /// and evaluates the texels whose surface is its object's.
-    #[allow(clippy::too_many_arguments)]
+    /// A compute evaluation of lateral.wgsl once per object (timed as `compute.timed`, summed
+    /// with the surfaces' raster pass where that is timed alike): each dispatch covers its
+    /// object's box and evaluates the texels whose surface is its object's.
     fn encode_compute(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        timed: &str,
+        compute: &Compute<'_>,
         lateral: &LateralTargets,
         surface: &LateralSurface,
-        pipeline: &wgpu::ComputePipeline,
         objects: &[GpuObject],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
+        let timed = compute.timed;
         let timer = TimedPass::begin(profiler, timed, encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(timed),
                 timestamp_writes: timer.compute_writes(),
             });
-            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(2, &surface.bind_group, &[]);
+            if let (Some(clear), Some(o)) = (compute.clear, objects.first()) {
+                pass.set_pipeline(clear);
+                pass.set_bind_group(1, &o.bind_group, &[]);
+                pass.set_bind_group(
+                    3,
+                    &self.object_rects.bind_group,
+                    &[self.object_rects.whole_offset()],
+                );
+                pass.dispatch_workgroups(
+                    lateral.width.div_ceil(TEXEL_BLOCK),
+                    lateral.height.div_ceil(TEXEL_BLOCK),
+                    1,
+                );
+            }
+            pass.set_pipeline(compute.pipeline);
             for (k, o) in objects.iter().enumerate() {
                 let Some((offset, w, h)) = self.object_rects.dispatch(
                     k,
@@ -1263,7 +1311,11 @@ impl LightingPass {
                 };
                 pass.set_bind_group(1, &o.bind_group, &[]);
                 pass.set_bind_group(3, &self.object_rects.bind_group, &[offset]);
-                pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+                pass.dispatch_workgroups(
+                    w.div_ceil(compute.block[0]),
+                    h.div_ceil(compute.block[1]),
+                    1,
+                );
             }
         }
         timer.end(profiler, encoder);

@@ -14,11 +14,19 @@ override TRANSMITTANCE_METHOD: u32 = 255u;
 // light's transmitted light there at once, and runs the chords here, without taps, where the
 // map has no texel of the pixel's surface), 2 per point with the taps (no map, skin too far for the map's texels:
 // the renderer draws it with this variant, gpu_scene.rs `lateral_taps_objects`, and the
-// lateral pass itself), 255 per point with the taps (the texture-space pass). A pipeline per
-// source, as for the method: the map's pipeline holds no tap loop, which llvmpipe runs for
-// every pixel once any pixel needs it (7 of the lighting pass's 117 ms at 640x360) and a GPU
-// pays for in registers.
+// lateral pass's fragment shader), 3 per point with the taps' sum given in `given_lateral`
+// (the lateral pass's compute shader, lateral.wgsl `cs_transmitted`, which spreads each texel's
+// taps over several invocations), 255 per point with the taps (the texture-space pass). A
+// pipeline per source, as for the method: the map's pipeline holds no tap loop, which llvmpipe
+// runs for every pixel once any pixel needs it (7 of the lighting pass's 117 ms at 640x360)
+// and a GPU pays for in registers.
 override LATERAL_SOURCE: u32 = 255u;
+
+// LATERAL_SOURCE 3: the light's entry (`light_entry`) at the point `transmittance` is called
+// for, and the sum of `lateral_tap_sum` over all its taps, which the caller gathered before
+// the call.
+var<private> given_entry: Entry;
+var<private> given_lateral: vec3<f32>;
 
 fn transmittance_method() -> u32 {
     if (TRANSMITTANCE_METHOD == 255u) {
@@ -323,6 +331,13 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
 // beside p (a front-lit surface next to a shadow) is the reflectance profile's, which the
 // screen-space blur already spreads. In T_ms / albedo units, as the LUT rows.
 fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, s_mm: f32) -> vec3<f32> {
+    return lateral_tap_sum(light, p, n_vertex, l, s_mm, 0u, 1u) * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
+}
+
+// The taps `first`, `first + stride`, ... of `lateral_transmittance`'s sum, before its factor
+// of the chord's rise: invocations that share a texel each take a stride of the taps, so that
+// the texel waits for a few of their shadow-map loads in turn rather than for all of them.
+fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, s_mm: f32, first: u32, stride: u32) -> vec3<f32> {
     let sigma = object.lateral_decay;
     let taps = min(lights.lateral_taps, 32u);
     let units_per_mm = object.world_per_mm * object.translucency;
@@ -336,11 +351,19 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
     // of the lateral pass (lavapipe, 640x360: 12 taps cost 0.7 ms each, the rest of the pass 8).
     let normal_in = 1.0 / boundary_transmittance(1.0);
     let per_tap = 1.0 / (f32(taps) * sigma);
-    // The taps turn by the golden angle: (cos, sin) of tap i, rotated once per tap.
-    let turn = vec2<f32>(-0.73736887, 0.67549029); // cos, sin of 2.39996323
+    // The taps turn by the golden angle: (cos, sin) of tap i, rotated once per tap; a stride
+    // of taps turns `stride` times as far (with stride 1, exactly `golden`).
+    let golden = vec2<f32>(-0.73736887, 0.67549029); // cos, sin of 2.39996323
     var dir = vec2<f32>(1.0, 0.0);
+    var turn = vec2<f32>(1.0, 0.0);
+    for (var k = 0u; k < stride; k++) {
+        if (k == first) {
+            dir = turn;
+        }
+        turn = vec2<f32>(turn.x * golden.x - turn.y * golden.y, turn.x * golden.y + turn.y * golden.x);
+    }
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < taps; i++) {
+    for (var i = first; i < taps; i += stride) {
         let xi = (f32(i) + 0.5) / f32(taps);
         let u = -log(1.0 - xi) / sigma;
         let r_tap = chord + u;
@@ -382,7 +405,7 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
         let slope = lut_row(min(r, DIFFUSION_RANGE_MM), DIFFUSION_RANGE_MM, SLOPE_ROW) * tail;
         sum += slope / r * weight * below * entry_in;
     }
-    return sum * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
+    return sum;
 }
 
 // How far (profile mm, along the view) a lateral-map texel's surface may lie from the pixel's
@@ -514,7 +537,12 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     if ((method == 5u && facing > 0.0 && lit >= 1.0) || (method != 5u && facing >= 0.3)) {
         return out;
     }
-    let entry = light_entry(light, p, n_vertex);
+    var entry: Entry;
+    if (LATERAL_SOURCE == 3u) {
+        entry = given_entry;
+    } else {
+        entry = light_entry(light, p, n_vertex);
+    }
     let s_mm = entry.s_mm;
     if (s_mm < 0.0) {
         return out;
@@ -566,10 +594,15 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 // medium keeps the light in (a finger, a wedge), the lateral one where light
                 // finds a shorter way than the chord (a palm beside the finger roots). Each is
                 // low where the other holds; the larger one counts.
-                if ((LATERAL_SOURCE == 2u || LATERAL_SOURCE == 255u) && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
+                if (LATERAL_SOURCE >= 2u && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
                     let flux = lut_row(s_shape, DIFFUSION_RANGE_MM, FLUX_ROW);
                     let shape = select(vec3<f32>(0.0), exit / flux, flux > vec3<f32>(1e-7));
-                    let lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
+                    var lateral: vec3<f32>;
+                    if (LATERAL_SOURCE == 3u) {
+                        lateral = given_lateral * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
+                    } else {
+                        lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
+                    }
                     diffuse = max(diffuse, shape * lateral);
                 }
                 out.diffuse = diffuse * unlit;
