@@ -21,6 +21,13 @@
 // the map (the finest level every cell nearer, the coarsest every cell farther), so each read
 // stands for a solid angle of about the same size.
 fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return bounce_rows(p, n, 0u, 1u);
+}
+
+// The rows `first_row`, `first_row + stride`, ... of each level's cells in
+// `bounce_irradiance`'s sum: invocations that share a texel each take a stride of the rows
+// (lateral.wgsl, `cs_bounce`).
+fn bounce_rows(p: vec3<f32>, n: vec3<f32>, first_row: u32, stride: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let ring = f32(lights.bounce_ring);
     if (ring <= 0.0) {
@@ -74,7 +81,7 @@ fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
             let lo = clamp(vec2<i32>(floor(uk - 2.0 * ring)), vec2<i32>(0), vec2<i32>(dim - 1));
             let hi = clamp(vec2<i32>(floor(uk + 2.0 * ring)), vec2<i32>(0), vec2<i32>(dim - 1));
             let rows = select(vec2<i32>(lo.y, hi.y), vec2<i32>(0, dim - 1), last);
-            for (var j = rows.x; j <= rows.y; j++) {
+            for (var j = rows.x + i32(first_row); j <= rows.y; j += i32(stride)) {
                 // The row's cells whose centres lie within the annulus: |dx| below the outer
                 // radius's half-chord, and at or past the inner one's (the finer levels read
                 // inside it). Only those are visited: a square would visit 81 cells a level at

@@ -129,12 +129,17 @@ var<workgroup> lane_taps: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LA
 var<workgroup> lane_diffuse: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_ballistic: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 
+// The texel (relative to the dispatch's origin) of workgroup `group`'s `slot`.
+fn block_texel(group: vec3<u32>, slot: u32) -> vec3<u32> {
+    let block = vec2<u32>(BLOCK_WIDTH, BLOCK_HEIGHT);
+    return vec3<u32>(group.xy * block + vec2<u32>(slot % BLOCK_WIDTH, slot / BLOCK_WIDTH), 0u);
+}
+
 @compute @workgroup_size(BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES)
 fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
     let slot = index / TEXEL_LANES;
     let lane = index % TEXEL_LANES;
-    let block = vec2<u32>(BLOCK_WIDTH, BLOCK_HEIGHT);
-    let s = texel_surface(vec3<u32>(group.xy * block + vec2<u32>(slot % BLOCK_WIDTH, slot / BLOCK_WIDTH), 0u));
+    let s = texel_surface(block_texel(group, slot));
     let count = min(lights.count, MAX_LIGHTS);
     let first_lane = slot * TEXEL_LANES;
     let translucent = s.own && object.translucency > 0.0;
@@ -200,13 +205,27 @@ fn cs_clear(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// `fs_bounce` (lighting.wgsl) on the recorded surfaces, into the map's bounce layer.
-@compute @workgroup_size(8, 8)
-fn cs_bounce(@builtin(global_invocation_id) id: vec3<u32>) {
-    let s = texel_surface(id);
-    if (!s.own) {
+// `fs_bounce` (lighting.wgsl) on the recorded surfaces, into the map's bounce layer: spread as
+// `cs_transmitted` is, each lane gathering a stride of each pyramid level's rows of cells (a
+// texel reads some 40 cells per level and light at ring 2, each a load whose result decides
+// the next two), and lane 0 adding the lanes' sums.
+@compute @workgroup_size(BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES)
+fn cs_bounce(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    let slot = index / TEXEL_LANES;
+    let lane = index % TEXEL_LANES;
+    let s = texel_surface(block_texel(group, slot));
+    var e = vec3<f32>(0.0);
+    if (s.own) {
+        e = bounce_rows(s.world, s.normal, lane, TEXEL_LANES);
+    }
+    lane_taps[index] = e;
+    workgroupBarrier();
+    if (!s.own || lane != 0u) {
         return;
     }
-    let layer = i32(lights.bounce_layer);
-    textureStore(lateral_out, s.texel, layer, vec4<f32>(bounce_irradiance(s.world, s.normal), s.depth));
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < TEXEL_LANES; k++) {
+        sum += lane_taps[slot * TEXEL_LANES + k];
+    }
+    textureStore(lateral_out, s.texel, i32(lights.bounce_layer), vec4<f32>(sum, s.depth));
 }

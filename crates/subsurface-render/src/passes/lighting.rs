@@ -623,18 +623,32 @@ const DIFFUSION_SPREAD: [(&str, f64); 2] = [
     (LATERAL_CONSTANT, 3.0),
 ];
 
-/// `cs_transmitted`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`), and the block of
-/// texels (across, down) a workgroup of 64 takes. On an H200, eight lanes took the default
-/// scene's map (two lights) in half the time of one (1280x720: 0.051 ms against 0.106) and
-/// the head's (three lights, a larger map) in two thirds; sixteen gained 0.002 ms on the first
-/// and lost 0.013 on the second (docs/performance.md).
+/// `cs_transmitted`'s and `cs_bounce`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`),
+/// and the block of texels (across, down) a workgroup of 64 takes. On an H200, eight lanes
+/// took the default scene's transmitted light (two lights) in half the time of one (1280x720:
+/// 0.051 ms against 0.106) and the head's (three lights, a larger map) in two thirds; sixteen
+/// gained 0.002 ms on the first and lost 0.013 on the second. The bounce's gather went from
+/// 0.43 to 0.12 ms (docs/performance.md).
 const TEXEL_LANES: u32 = 8;
 const SPREAD_BLOCK: [u32; 2] = [4, 2];
 // Each light needs a lane of its own for its entry and the rest of its transmittance.
 const _: () = assert!(TEXEL_LANES as usize >= crate::uniforms::MAX_LIGHTS);
-/// Texels per workgroup of lateral.wgsl's other compute shaders, across and down: 8 x 8,
-/// one invocation each.
+/// Texels per workgroup of `cs_clear`, across and down: 8 x 8, one invocation each.
 const TEXEL_BLOCK: u32 = 8;
+
+/// `base` with the overrides that spread a texel over lanes (`cs_transmitted`, `cs_bounce`).
+fn spread_constants(base: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
+    let [width, height] = SPREAD_BLOCK;
+    [
+        base,
+        &[
+            ("TEXEL_LANES", f64::from(TEXEL_LANES)),
+            ("BLOCK_WIDTH", f64::from(width)),
+            ("BLOCK_HEIGHT", f64::from(height)),
+        ],
+    ]
+    .concat()
+}
 
 /// The WGSL override that fixes where a pipeline's pixels take the bounce from (lighting.wgsl,
 /// `BOUNCE_SOURCE`).
@@ -991,21 +1005,13 @@ impl LightingPass {
             return;
         }
         if transmitted_map(lights) && self.transmitted_compute.is_none() {
-            let [width, height] = SPREAD_BLOCK;
-            let constants = [
-                DIFFUSION_SPREAD.as_slice(),
-                &[
-                    ("TEXEL_LANES", f64::from(TEXEL_LANES)),
-                    ("BLOCK_WIDTH", f64::from(width)),
-                    ("BLOCK_HEIGHT", f64::from(height)),
-                ],
-            ]
-            .concat();
+            let constants = spread_constants(&DIFFUSION_SPREAD);
             self.transmitted_compute =
                 Some(self.build_compute(device, "cs_transmitted", &constants));
         }
         if bounce_layer(lights).is_some() && self.bounce_compute.is_none() {
-            self.bounce_compute = Some(self.build_compute(device, "cs_bounce", &DIFFUSION_WHOLE));
+            let constants = spread_constants(&DIFFUSION_WHOLE);
+            self.bounce_compute = Some(self.build_compute(device, "cs_bounce", &constants));
         }
         if self.clear_compute.is_none()
             && (self.transmitted_compute.is_some() || self.bounce_compute.is_some())
@@ -1226,7 +1232,7 @@ impl LightingPass {
             let mut clear = self.clear_compute.as_ref();
             for (timed, pipeline, block) in [
                 ("lateral", transmitted_compute, SPREAD_BLOCK),
-                ("bounce", bounce_compute, [TEXEL_BLOCK; 2]),
+                ("bounce", bounce_compute, SPREAD_BLOCK),
             ] {
                 if let Some(pipeline) = pipeline {
                     let compute = Compute {
