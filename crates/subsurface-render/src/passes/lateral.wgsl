@@ -208,7 +208,7 @@ fn cs_clear(@builtin(global_invocation_id) id: vec3<u32>) {
 // `fs_bounce` (lighting.wgsl) on the recorded surfaces, into the map's bounce layer: spread as
 // `cs_transmitted` is, each lane gathering a stride of each pyramid level's rows of cells (a
 // texel reads some 40 cells per level and light at ring 2, each a load whose result decides
-// the next two), and lane 0 adding the lanes' sums.
+// the next two), and lane 0 adding the lanes' sums (in `lane_taps`, free in this pipeline).
 @compute @workgroup_size(BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES)
 fn cs_bounce(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) index: u32) {
     let slot = index / TEXEL_LANES;
