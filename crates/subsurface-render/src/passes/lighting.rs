@@ -592,13 +592,13 @@ struct MapPass<'a> {
     pipeline: &'a wgpu::RenderPipeline,
 }
 
-/// One compute pass of [`LightingPass::encode_compute`]: `pipeline` once per object, each
-/// workgroup over `block` texels (across, down), after `clear` over the whole map where given.
+/// One compute pass of [`LightingPass::encode_compute`]: `pipeline` (spread over lanes, a
+/// workgroup per [`SPREAD_BLOCK`]) once per object, after `clear` over the whole map where
+/// given.
 struct Compute<'a> {
     timed: &'a str,
     clear: Option<&'a wgpu::ComputePipeline>,
     pipeline: &'a wgpu::ComputePipeline,
-    block: [u32; 2],
 }
 
 /// The WGSL override that fixes a pipeline's transmittance method (transmittance.wgsl).
@@ -1230,16 +1230,13 @@ impl LightingPass {
             // Render passes that only cleared its layers took 0.02 ms more on an H200 at
             // 1920x1080 (docs/performance.md).
             let mut clear = self.clear_compute.as_ref();
-            for (timed, pipeline, block) in [
-                ("lateral", transmitted_compute, SPREAD_BLOCK),
-                ("bounce", bounce_compute, SPREAD_BLOCK),
-            ] {
+            for (timed, pipeline) in [("lateral", transmitted_compute), ("bounce", bounce_compute)]
+            {
                 if let Some(pipeline) = pipeline {
                     let compute = Compute {
                         timed,
                         clear: clear.take(),
                         pipeline,
-                        block,
                     };
                     self.encode_compute(encoder, &compute, lateral, surface, objects, profiler);
                 }
@@ -1318,8 +1315,8 @@ impl LightingPass {
                 pass.set_bind_group(1, &o.bind_group, &[]);
                 pass.set_bind_group(3, &self.object_rects.bind_group, &[offset]);
                 pass.dispatch_workgroups(
-                    w.div_ceil(compute.block[0]),
-                    h.div_ceil(compute.block[1]),
+                    w.div_ceil(SPREAD_BLOCK[0]),
+                    h.div_ceil(SPREAD_BLOCK[1]),
                     1,
                 );
             }
