@@ -1,6 +1,6 @@
 //! `subsurface view` in a real window: scripted runs (`--frames N`) under the session's
 //! display or Xvfb, compared with `subsurface render` of the same scene. Without a display,
-//! xvfb-run or a GPU these tests skip with a message, unless SUBSURFACE_REQUIRE_GPU=1.
+//! Xvfb or a GPU these tests skip with a message, unless SUBSURFACE_REQUIRE_GPU=1.
 //!
 //! The window-settings round trip and camera input mapping are unit tests beside the code
 //! (`cargo test -p subsurface-cli --bin subsurface view::`); here the binary is checked end
@@ -8,13 +8,14 @@
 
 mod common;
 
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::Mutex;
 
 use common::{bin, gpu_available, skip, subsurface, tempdir, text};
 
-/// xvfb-run -a picks a free display number racily: one window test at a time.
+/// One window test at a time: each runs its own Xvfb, and the lavapipe device is shared.
 static WINDOW: Mutex<()> = Mutex::new(());
 
 const W: &str = "320";
@@ -25,21 +26,84 @@ fn on_path(program: &str) -> bool {
         .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(program).is_file()))
 }
 
-/// The command that runs `subsurface` with a window: directly on the session's display,
-/// else inside xvfb-run. None (after a skip message) when neither exists.
-fn windowed() -> Option<Command> {
+/// A private Xvfb server, stopped when dropped. It is started directly rather than through
+/// xvfb-run: under load xvfb-run's own clean-up once exited 5 after `subsurface` had passed
+/// (issue 41), failing the test on the wrapper's status. `-displayfd` makes the server pick a
+/// free display and say which, so no two servers race for a number.
+struct Xvfb {
+    server: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        let mut server = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x800x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start Xvfb: {e}"));
+        let mut line = String::new();
+        BufReader::new(server.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let number = line.trim();
+        if number.is_empty() {
+            let status = server.wait().ok();
+            panic!("Xvfb named no display (exit {status:?})");
+        }
+        Xvfb {
+            display: format!(":{number}"),
+            server,
+        }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        self.server.kill().ok();
+        self.server.wait().ok();
+    }
+}
+
+/// A window session: the command that runs `subsurface` on the session's display, else on a
+/// private Xvfb (kept alive as long as the session). None (after a skip message) when neither
+/// exists.
+struct Windowed {
+    command: Command,
+    _server: Option<Xvfb>,
+}
+
+fn windowed() -> Option<Windowed> {
     let has_display = ["DISPLAY", "WAYLAND_DISPLAY"]
         .iter()
         .any(|k| std::env::var_os(k).is_some_and(|v| !v.is_empty()));
     if has_display {
-        return Some(Command::new(bin()));
+        return Some(Windowed {
+            command: Command::new(bin()),
+            _server: None,
+        });
     }
-    if on_path("xvfb-run") {
-        let mut c = Command::new("xvfb-run");
-        c.args(["-a", "-s", "-screen 0 1280x800x24", bin()]);
-        return Some(c);
+    if on_path("Xvfb") {
+        let server = Xvfb::start();
+        let mut command = Command::new(bin());
+        command.env("DISPLAY", &server.display);
+        command.env_remove("WAYLAND_DISPLAY");
+        return Some(Windowed {
+            command,
+            _server: Some(server),
+        });
     }
-    skip("no DISPLAY and no xvfb-run");
+    skip("no DISPLAY and no Xvfb");
     None
 }
 
@@ -48,9 +112,10 @@ fn render(args: &[&str], dir: &Path) -> Output {
 }
 
 fn view(args: &[&str], dir: &Path) -> Option<Output> {
-    let mut c = windowed()?;
     let _one_at_a_time = WINDOW.lock().unwrap_or_else(|e| e.into_inner());
-    let out = c
+    let mut w = windowed()?;
+    let out = w
+        .command
         .arg("view")
         .args(["--width", W, "--height", H])
         .args(args)
@@ -108,7 +173,7 @@ const SIZE: [&str; 4] = ["--width", W, "--height", H];
 
 /// Runs `subsurface view --frames FRAMES --screenshot view.png ARGS` in a scratch directory
 /// `name` and returns the directory; None when the test is skipped (no GPU adapter, or no
-/// display and no xvfb-run).
+/// display and no Xvfb).
 fn screenshot(name: &str, frames: &str, args: &[&str]) -> Option<PathBuf> {
     let dir = tempdir(name);
     if !gpu_available(&dir) {
@@ -304,9 +369,10 @@ fn soak_keeps_memory_and_gpu_objects_flat() {
         .unwrap_or_else(|| panic!("no skipped-redraw count in: {line}"));
     assert!(skipped >= 10, "{line}");
     // Too short a run to have a warm-up and a measured cycle is an error, not a pass.
-    let mut c = windowed().unwrap();
     let _one_at_a_time = WINDOW.lock().unwrap_or_else(|e| e.into_inner());
-    let short = c
+    let mut w = windowed().unwrap();
+    let short = w
+        .command
         .args([
             "view", "--width", W, "--height", H, "--frames", "2", "--soak",
         ])
