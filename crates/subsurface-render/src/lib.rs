@@ -6,8 +6,10 @@
 
 pub mod budget;
 pub mod error;
+pub mod frame_plan;
 pub mod gpu;
 pub mod gpu_scene;
+pub mod lights;
 pub mod material;
 pub mod mesh;
 pub mod passes;

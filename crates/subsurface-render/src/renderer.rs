@@ -4,12 +4,13 @@
 use wgpu_profiler::GpuProfiler;
 
 use crate::error::RenderError;
+use crate::frame_plan::{AdapterFeatures, FramePlan};
 use crate::gpu::GpuContext;
 use crate::gpu_scene::{self, GpuObject};
 use crate::material::{MaterialCache, ProfileTable};
 use crate::passes::bounce::FluxPyramid;
 use crate::passes::copy::CopyPass;
-use crate::passes::lighting::{self, LateralShape, LightingPass, LightingTargets};
+use crate::passes::lighting::{self, LightingPass, LightingTargets};
 use crate::passes::shadow::ShadowPass;
 use crate::passes::sss::{SssInputs, SssPass};
 use crate::passes::texture_space::{self, TextureSpacePass, TextureSpaceSettings, TsmPass};
@@ -81,8 +82,8 @@ pub struct Renderer {
     far: f32,
     light_kinds: Vec<[f32; 4]>,
     shadow_signature: Vec<(usize, u32)>,
-    /// Whether the lateral pass evaluates the transmitted light (`lighting::transmitted_map`).
-    transmitted_map: bool,
+    /// What the current frame is made of.
+    plan: FramePlan,
     /// Each object's LUT key (`gpu_scene::lut_key`): a change re-uploads the objects.
     lut_keys: Vec<String>,
     /// The screen-space profile table and each object's row in it.
@@ -146,28 +147,22 @@ fn shadow_signature(lights: &gpu_scene::LightSetup) -> Vec<(usize, u32)> {
     v
 }
 
-/// The flux pyramid of `shadow` where `lights` asks for the bounce; where the device cannot
-/// build one the bounce is turned off in `lights`.
+/// The flux pyramid of `shadow` where the plan gathers the bounce.
 fn flux_pyramid(
     ctx: &GpuContext,
     shadow: &ShadowPass,
-    lights: &mut gpu_scene::LightSetup,
+    lights: &gpu_scene::LightSetup,
+    plan: &FramePlan,
 ) -> Option<FluxPyramid> {
-    if lights.uniform.bounce_ring == 0 {
-        return None;
-    }
-    if !FluxPyramid::supported(&ctx.device) {
-        log::warn!("bounce: this adapter has no compute storage textures; rendering without it");
-        lights.uniform.bounce_ring = 0;
-        return None;
-    }
-    Some(FluxPyramid::new(
-        ctx,
-        &shadow.atlas_view,
-        &lights.layers,
-        lights.atlas_size,
-        &lights.uniform,
-    ))
+    (plan.bounce_ring > 0).then(|| {
+        FluxPyramid::new(
+            ctx,
+            &shadow.atlas_view,
+            &lights.layers,
+            lights.atlas_size,
+            &lights.uniform,
+        )
+    })
 }
 
 /// The shadow maps the lighting pass binds, with `bounce`'s flux pyramid.
@@ -182,20 +177,18 @@ fn shadow_maps<'a>(
     maps
 }
 
-/// The objects the lighting pass draws with the pipeline that gathers `diffusion`'s lateral
-/// taps itself although the frame has a lateral map (`gpu_scene::lateral_taps_objects`).
-fn taps_objects(
+/// The frame plan of `scene` with `options` on `ctx`'s adapter, and the lights it is lit by
+/// (their uniform written with what the plan decided and the shaders read).
+fn plan_frame(
+    ctx: &GpuContext,
     scene: &Scene,
     options: &RenderOptions,
-    lights: &crate::uniforms::LightsUniform,
-) -> Vec<bool> {
-    gpu_scene::lateral_taps_objects(
-        scene,
-        &options.settings,
-        options.width(),
-        options.height(),
-        lights.lateral_downsample,
-    )
+) -> Result<(FramePlan, gpu_scene::LightSetup), RenderError> {
+    let plan = FramePlan::new(scene, &options.settings, AdapterFeatures::of(&ctx.device));
+    let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
+    plan.write_lights(&mut lights.uniform);
+    lights.uniform.thickness_view = thickness_flag(options.view);
+    Ok((plan, lights))
 }
 
 fn thickness_flag(view: DebugView) -> u32 {
@@ -262,8 +255,7 @@ impl Renderer {
         let object_layout = gpu_scene::object_layout(device);
         let profiles = profile_table(scene, &options)?;
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
-        let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
-        lights.uniform.thickness_view = thickness_flag(options.view);
+        let (plan, lights) = plan_frame(ctx, scene, &options)?;
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
@@ -272,7 +264,7 @@ impl Renderer {
             lights.atlas_size,
             &kinds,
         )?;
-        let bounce = flux_pyramid(ctx, &shadow, &mut lights);
+        let bounce = flux_pyramid(ctx, &shadow, &lights, &plan);
         let camera = gpu_scene::camera_uniform(scene, options.width(), options.height());
         let maps_layout = texture_space::maps_layout(device);
         let settings = texture_settings(&options);
@@ -280,29 +272,17 @@ impl Renderer {
             .tsm
             .then(|| TsmPass::new(ctx, &object_layout, &lights.layers, lights.atlas_size));
         let tsm_dummy = texture_space::dummy_tsm_view(device);
-        let mut lighting = LightingPass::with_maps(
+        let lighting = LightingPass::with_maps(
             ctx,
-            &object_layout,
-            &maps_layout,
-            &camera,
-            &lights.uniform,
+            [&object_layout, &maps_layout],
+            (&camera, &lights.uniform),
             shadow_maps(&shadow, &bounce),
             tsm.as_ref().map_or(&tsm_dummy, |t| &t.atlas_view),
-        );
-        lighting.set_taps_objects(device, taps_objects(scene, &options, &lights.uniform));
-        lighting.set_object_rects(
-            device,
-            &gpu_scene::screen_rects(scene, options.width(), options.height()),
-            lights.uniform.lateral_downsample,
+            &plan,
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
-        let targets = LightingTargets::with_lateral(
-            ctx,
-            options.width(),
-            options.height(),
-            LateralShape::for_lights(&lights.uniform),
-        );
-        let transmitted_map = lighting::transmitted_map(&lights.uniform);
+        let targets =
+            LightingTargets::with_lateral(ctx, options.width(), options.height(), plan.lateral);
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
         sss.resize(
@@ -337,7 +317,7 @@ impl Renderer {
             far: scene.desc.camera.far,
             light_kinds: kinds,
             shadow_signature: shadow_signature(&lights),
-            transmitted_map,
+            plan,
             lut_keys: gpu_scene::lut_keys(scene),
             profiles,
             maps_layout,
@@ -397,8 +377,7 @@ impl Renderer {
                 queue.write_buffer(&g.uniform, 0, bytemuck::bytes_of(&u));
             }
         }
-        let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
-        lights.uniform.thickness_view = thickness_flag(options.view);
+        let (plan, lights) = plan_frame(&self.ctx, scene, options)?;
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let signature = shadow_signature(&lights);
         let settings = texture_settings(options);
@@ -418,10 +397,10 @@ impl Renderer {
         }
         let had_bounce = self.bounce.is_some();
         match &self.bounce {
-            Some(b) if !rebuild_shadows && lights.uniform.bounce_ring > 0 => {
+            Some(b) if !rebuild_shadows && plan.bounce_ring > 0 => {
                 b.update(&queue, &lights.layers, &lights.uniform)
             }
-            _ => self.bounce = flux_pyramid(&self.ctx, &self.shadow, &mut lights),
+            _ => self.bounce = flux_pyramid(&self.ctx, &self.shadow, &lights, &plan),
         }
         let new_bounce = rebuild_shadows || had_bounce != self.bounce.is_some();
         let had_tsm = self.tsm.is_some();
@@ -444,33 +423,25 @@ impl Renderer {
         // calls this on every mouse drag).
         let new_maps = new_bounce || had_tsm != settings.tsm || (settings.tsm && !had_tsm);
         if !new_maps {
-            // The uniforms and, for another transmittance method, its pipeline.
-            self.lighting.prepare(&self.ctx, &camera, &lights.uniform);
+            // The uniforms and the plan's pipelines.
+            self.lighting
+                .prepare(&self.ctx, &camera, &lights.uniform, &plan);
         } else {
             self.lighting = LightingPass::with_maps(
                 &self.ctx,
-                &self.object_layout,
-                &self.maps_layout,
-                &camera,
-                &lights.uniform,
+                [&self.object_layout, &self.maps_layout],
+                (&camera, &lights.uniform),
                 shadow_maps(&self.shadow, &self.bounce),
                 self.tsm.as_ref().map_or(&self.tsm_dummy, |t| &t.atlas_view),
+                &plan,
             );
         }
-        self.lighting
-            .set_taps_objects(&device, taps_objects(scene, options, &lights.uniform));
-        self.lighting.set_object_rects(
-            &device,
-            &gpu_scene::screen_rects(scene, options.width(), options.height()),
-            lights.uniform.lateral_downsample,
-        );
         let texture_signature = (settings, skin_flags(scene));
         if reuploaded || texture_signature != self.texture_signature {
             self.texture_space =
                 TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
             self.texture_signature = texture_signature;
         }
-        self.transmitted_map = lighting::transmitted_map(&lights.uniform);
         // New targets (and every binding of them) when the size changes; a new lateral map
         // alone when only its shape does (the camera moved the skin nearer or farther, a
         // shadowed light came or went).
@@ -481,12 +452,11 @@ impl Renderer {
                 &self.ctx,
                 options.width(),
                 options.height(),
-                LateralShape::for_lights(&lights.uniform),
+                plan.lateral,
             );
             self.output = output_texture(&self.ctx, options.width(), options.height());
-        } else if LateralShape::for_lights(&lights.uniform) != self.targets.lateral_shape() {
-            self.targets
-                .set_lateral(&self.ctx, LateralShape::for_lights(&lights.uniform));
+        } else if plan.lateral != self.targets.lateral_shape() {
+            self.targets.set_lateral(&self.ctx, plan.lateral);
         }
         let views = target_views(&self.targets);
         let new_sss = new_profiles || options.settings.sss != self.options.settings.sss;
@@ -514,6 +484,7 @@ impl Renderer {
         self.background = options.settings.background;
         self.far = scene.desc.camera.far;
         self.options = options.clone();
+        self.plan = plan;
         for i in 0..self.tonemaps.len() {
             if resized {
                 self.tonemaps[i].frame = self.frame_bind_group(&self.tonemaps[i].pass);
@@ -569,7 +540,6 @@ impl Renderer {
             &self.targets,
             &self.objects,
             self.texture_space.bind_groups(),
-            self.transmitted_map,
             self.background,
             self.far,
             p,

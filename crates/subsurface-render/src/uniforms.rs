@@ -64,7 +64,7 @@ pub struct LightsUniform {
     /// `diffusion`: shadow-map taps of the lit surface around the chord (0: the chord alone).
     pub lateral_taps: u32,
     /// 1: the lateral taps run per pixel; N > 1: the lighting pass reads them from the lateral
-    /// map at 1/N resolution (`passes::lighting::LateralTargets`).
+    /// map at 1/N resolution (`passes::lateral_map::LateralTargets`).
     pub lateral_downsample: u32,
     /// The lateral map's layer that holds the bounce gathered at its texels
     /// (`passes::bounce`).
@@ -73,11 +73,7 @@ pub struct LightsUniform {
     pub bounce_ring: u32,
     /// `BounceSettings::cell_mm`: the finest cells read, profile millimetres.
     pub bounce_cell_mm: f32,
-    /// 1: the lateral map is evaluated by a compute shader on its texels' surfaces
-    /// (`LateralPass::Compute`), 0: by the map's fragment shader. Read on the host only (the
-    /// lateral targets' shape, `passes::lighting::LateralShape`); the shaders see the same map.
-    pub lateral_compute: u32,
-    pub _pad: u32,
+    pub _pad: [u32; 2],
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
@@ -165,4 +161,135 @@ pub struct BlurUniform {
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct TsmViewUniform {
     pub view_proj: [[f32; 4]; 4],
+}
+
+/// Every uniform block the shaders declare is laid out in WGSL as its mirror here is in Rust:
+/// each named member at the same offset and the same size in all, read from the compiled
+/// shader by naga, so a field added on one side only fails here rather than on a GPU.
+#[cfg(test)]
+mod layout_tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+
+    /// `(member, offset)` of a WGSL struct of the lighting shader, and its span.
+    fn wgsl_struct(name: &str) -> (Vec<(String, usize)>, usize) {
+        let module = naga::front::wgsl::parse_str(crate::passes::lighting::SHADER).unwrap();
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no struct {name} in the lighting shader"));
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{name} is not a struct");
+        };
+        let _ = handle;
+        let members = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+            .collect();
+        (members, *span as usize)
+    }
+
+    /// Asserts that WGSL's `name` matches `rust` (`(field, offset)` of every named field of the
+    /// Rust struct, `size` its size); members whose names start with `_` are padding.
+    fn assert_same(name: &str, rust: &[(&str, usize)], size: usize) {
+        let (wgsl, span) = wgsl_struct(name);
+        assert_eq!(span, size, "{name}: WGSL span {span}, Rust size {size}");
+        let named: Vec<_> = wgsl.iter().filter(|(m, _)| !m.starts_with('_')).collect();
+        for (member, offset) in &named {
+            let want = rust.iter().find(|(f, _)| f == member).map(|(_, o)| *o);
+            assert_eq!(
+                want,
+                Some(*offset),
+                "{name}.{member}: WGSL offset {offset}, Rust {want:?}"
+            );
+        }
+        for (field, _) in rust {
+            assert!(
+                named.iter().any(|(m, _)| m == field),
+                "{name}: Rust field {field} has no WGSL member"
+            );
+        }
+    }
+
+    macro_rules! fields {
+        ($ty:ty { $($f:ident),* $(,)? }) => {
+            &[$((stringify!($f), offset_of!($ty, $f))),*]
+        };
+    }
+
+    #[test]
+    fn uniform_blocks_match_their_wgsl_declarations() {
+        let viewport = offset_of!(CameraUniform, viewport);
+        let camera: &[(&str, usize)] = fields!(CameraUniform {
+            view_proj,
+            position,
+            near,
+            forward,
+            far,
+            focal_px
+        });
+        // WGSL takes the viewport as two scalars (a vec2 would be aligned to 8 bytes).
+        let camera = [
+            camera,
+            &[("viewport_x", viewport), ("viewport_y", viewport + 4)],
+        ]
+        .concat();
+        assert_same("Camera", &camera, size_of::<CameraUniform>());
+        let light = fields!(LightUniform {
+            position,
+            kind,
+            direction,
+            first_layer,
+            color,
+            shadow_bias,
+            cos_outer,
+            cos_inner,
+            shadow_uv_scale,
+            atlas_texel,
+            view_proj,
+        });
+        assert_same("Light", light, size_of::<LightUniform>());
+        let lights = fields!(LightsUniform {
+            count,
+            transmittance,
+            thickness_filter,
+            thickness_view,
+            ambient,
+            normal_shrink,
+            scattering,
+            lateral_taps,
+            lateral_downsample,
+            bounce_layer,
+            bounce_ring,
+            bounce_cell_mm,
+            lights,
+        });
+        assert_same("Lights", lights, size_of::<LightsUniform>());
+        let object = fields!(ObjectUniform {
+            model,
+            normal_matrix,
+            albedo,
+            roughness,
+            specular,
+            sss_strength,
+            world_per_mm,
+            translucency,
+            has_albedo_map,
+            has_normal_map,
+            has_specular_map,
+            profile,
+            extinction,
+            lut_range_mm,
+            eta,
+            lateral_decay,
+            index,
+            scattering,
+            boundary_fit,
+        });
+        assert_same("Object", object, size_of::<ObjectUniform>());
+    }
 }

@@ -2,6 +2,7 @@
 //! with timestamp queries where available, and validation errors turned into `RenderError`s.
 
 pub mod layout;
+pub mod object;
 
 use std::cell::RefCell;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
@@ -198,4 +199,15 @@ async fn select_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, Rend
         backend: env("WGPU_BACKEND"),
         name: env("WGPU_ADAPTER_NAME"),
     })
+}
+
+/// Whether the adapter runs the compute passes that write storage textures (the flux pyramid,
+/// the lateral map's compute evaluation, the workgroup SSS fetch): two storage textures per
+/// stage and workgroups of 128 invocations with 4 KiB of shared memory.
+pub fn supports_compute_storage(device: &wgpu::Device) -> bool {
+    let l = device.limits();
+    l.max_storage_textures_per_shader_stage >= 2
+        && l.max_compute_invocations_per_workgroup >= 128
+        && l.max_compute_workgroup_size_x >= 128
+        && l.max_compute_workgroup_storage_size >= 4096
 }

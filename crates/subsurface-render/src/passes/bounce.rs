@@ -23,7 +23,7 @@ use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use crate::gpu::GpuContext;
-use crate::gpu_scene::ShadowLayer;
+use crate::lights::ShadowLayer;
 use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{LightsUniform, mat};

@@ -44,7 +44,7 @@ struct Lights {
     bounce_layer: u32,     // the lateral map's layer holding the bounce (bounce.wgsl)
     bounce_ring: u32,      // cells of each pyramid level between a point and the next; 0 = off
     bounce_cell_mm: f32,   // the finest cells read, profile mm
-    lateral_compute: u32,  // host only: the lateral map is evaluated by cs_transmitted
+    _pad2: u32,
     _pad3: u32,
     lights: array<Light, MAX_LIGHTS>,
 };

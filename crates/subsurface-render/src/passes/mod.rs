@@ -3,8 +3,10 @@
 pub mod bounce;
 pub mod copy;
 pub mod fullscreen;
+pub mod lateral_map;
 pub mod lighting;
 pub mod maps;
+pub mod overrides;
 pub mod shadow;
 pub mod sss;
 pub mod texture_space;

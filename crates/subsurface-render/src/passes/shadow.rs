@@ -6,7 +6,7 @@
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::gpu_scene::ShadowLayer;
+use crate::lights::ShadowLayer;
 use crate::passes::util;
 use crate::uniforms::{ShadowViewUniform, mat, v4};
 

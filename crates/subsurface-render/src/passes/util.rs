@@ -7,8 +7,29 @@ use wgpu::util::DeviceExt;
 pub use crate::gpu::layout::{
     float_texture_entry, sampler_entry, storage_entry, storage_texture_entry, uniform_entry,
 };
-use crate::gpu_scene::{GpuObject, ShadowLayer, VERTEX_LAYOUT};
+use crate::gpu::object::{GpuObject, VERTEX_LAYOUT};
+pub use crate::gpu::supports_compute_storage;
+use crate::lights::ShadowLayer;
 use crate::timing::TimedPass;
+
+/// Draws every object with `pipeline`, group 0 `frame` and each object's group 2 (`maps[i]`
+/// for `objects[i]`, `default_maps` past them): the mesh passes on the lighting shader bind
+/// the same groups.
+pub fn draw_objects(
+    pass: &mut wgpu::RenderPass<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    frame: &wgpu::BindGroup,
+    objects: &[GpuObject],
+    maps: &[wgpu::BindGroup],
+    default_maps: &wgpu::BindGroup,
+) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, frame, &[]);
+    for (i, o) in objects.iter().enumerate() {
+        pass.set_bind_group(2, maps.get(i).unwrap_or(default_maps), &[]);
+        o.draw(pass);
+    }
+}
 
 /// The z-buffer of every depth-tested mesh pass; [`depth_buffer`] and [`MeshPipeline`] share it
 /// so that a pipeline always matches the buffer it is drawn with.
@@ -121,16 +142,6 @@ pub fn texture_2d(
         usage,
         view_formats: &[],
     })
-}
-
-/// Whether the device runs the compute passes that write storage textures (the SSS workgroup
-/// fetch): not on downlevel adapters such as WebGL2.
-pub fn supports_compute_storage(device: &wgpu::Device) -> bool {
-    let l = device.limits();
-    l.max_storage_textures_per_shader_stage >= 2
-        && l.max_compute_invocations_per_workgroup >= 128
-        && l.max_compute_workgroup_size_x >= 128
-        && l.max_compute_workgroup_storage_size >= 4096
 }
 
 /// A 1x1 texture's view, to fill a binding a pipeline does not read.

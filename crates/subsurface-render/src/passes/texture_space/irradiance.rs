@@ -17,7 +17,7 @@ use crate::timing::TimedPass;
 
 pub const SHADER: &str = concat!(
     include_str!("../common.wgsl"),
-    include_str!("../lighting.wgsl"),
+    include_str!("../lighting/lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
     include_str!("../transmittance.wgsl"),
     include_str!("../bounce.wgsl"),

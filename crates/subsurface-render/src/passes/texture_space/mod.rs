@@ -28,7 +28,7 @@ pub mod irradiance;
 
 use crate::error::RenderError;
 use crate::gpu::GpuContext;
-use crate::gpu_scene::GpuObject;
+use crate::gpu::object::GpuObject;
 use crate::passes::lighting::LightingPass;
 use crate::passes::maps::{self, map_texture};
 use crate::passes::transmittance::MaterialCache;

@@ -7,7 +7,7 @@
 //! vertex normal.
 
 use crate::gpu::GpuContext;
-use crate::gpu_scene::ShadowLayer;
+use crate::lights::ShadowLayer;
 use crate::passes::util;
 use crate::uniforms::{TsmViewUniform, mat};
 

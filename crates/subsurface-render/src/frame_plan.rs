@@ -1,0 +1,536 @@
+//! The frame plan: what one frame is made of, decided once from the settings, the scene and
+//! the adapter, before any uniform is written. The renderer builds its targets and pipelines
+//! from it and encodes the passes it names; the uniforms carry only what shaders read.
+//!
+//! ```text
+//! shadow maps ──► flux pyramid (bounce) ──┐
+//!      │                                  ▼
+//!      ├──────────────► lateral map (transmitted light, bounce; 1/N resolution)
+//!      ▼                                  ▼
+//! depth prepass ──► lighting (diffuse, specular, depth, skin) ──► SSS blur ──► tone map
+//! ```
+//!
+//! Every decision that used to be read back from `LightsUniform` lives here: the lateral
+//! map's reduction and layers, whether it holds `diffusion`'s transmitted light, whether and
+//! where the bounce is gathered, each lighting pipeline's variant, which objects gather their
+//! own lateral taps, and each object's box on screen.
+
+use glam::{Mat4, Vec3};
+
+use crate::gpu_scene::{camera_uniform, world_per_mm};
+use crate::scene::{LightKind, Scene};
+use crate::settings::{LateralPass, RenderSettings, SssMethod, TransmittanceMethod};
+use crate::uniforms::LightsUniform;
+
+/// What the adapter can do that changes the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AdapterFeatures {
+    /// Storage textures and workgroups large enough for the compute passes (the flux pyramid,
+    /// the lateral map's compute evaluation, the workgroup SSS fetch).
+    pub compute_storage: bool,
+}
+
+impl AdapterFeatures {
+    /// Everything this renderer can use.
+    pub const ALL: Self = Self {
+        compute_storage: true,
+    };
+
+    pub fn of(device: &wgpu::Device) -> Self {
+        Self {
+            compute_storage: crate::gpu::supports_compute_storage(device),
+        }
+    }
+}
+
+/// The layers of the lateral map that hold `diffusion`'s transmitted light (0 diffuse, 1
+/// unscattered and singly scattered); the bounce's layer, if any, follows them.
+pub const TRANSMITTED_LAYERS: u32 = 2;
+
+/// What a lateral map is made of: its reduction (1: no map) and its layers (the transmitted
+/// light's, and the bounce's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LateralShape {
+    pub downsample: u32,
+    pub layers: u32,
+    /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
+    /// surfaces (`LateralPass::Compute` on an adapter that runs them) rather than in the
+    /// map's fragment shaders.
+    pub compute: bool,
+}
+
+impl LateralShape {
+    pub const NONE: Self = Self {
+        downsample: 1,
+        layers: 0,
+        compute: false,
+    };
+}
+
+/// What one lighting pipeline is built for: the lights' transmittance method
+/// (`TransmittanceMethod::code`), where its pixels take the bounce from and where its
+/// `diffusion` takes the lateral light from. A pipeline per variant, so that the shader
+/// compiler drops the other variants' code (lighting.wgsl `BOUNCE_SOURCE`, transmittance.wgsl
+/// `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightingVariant {
+    pub method: u32,
+    /// 0 no bounce, 1 the lateral map's bounce layer, 2 a gather per pixel (no map).
+    pub bounce: u32,
+    /// 0 no lateral light (another method, or no taps), 1 the lateral map (the lights' chords
+    /// per pixel only where the map has no texel of the pixel's surface), 2 the taps per pixel
+    /// (no map; with a map, the variant [`FramePlan::taps_objects`] are drawn with).
+    pub lateral: u32,
+}
+
+/// One frame's structure. Made by [`FramePlan::new`]; compared with the last frame's to
+/// decide what must be rebuilt.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FramePlan {
+    pub width: u32,
+    pub height: u32,
+    /// The lateral map's reduction: one texel per `N` x `N` pixels (1: the taps run per pixel).
+    pub lateral_downsample: u32,
+    /// The lateral map holds `diffusion`'s transmitted light, every light summed, in its first
+    /// [`TRANSMITTED_LAYERS`] layers.
+    pub transmitted_map: bool,
+    /// `BounceSettings::ring` where the bounce runs (0: it does not).
+    pub bounce_ring: u32,
+    /// The lateral map's layer the bounce is gathered into, if it is gathered on the map.
+    pub bounce_layer: Option<u32>,
+    /// The lateral map's shape ([`LateralShape::NONE`]: no map).
+    pub lateral: LateralShape,
+    /// The lighting pipeline most pixels are drawn with.
+    pub lighting: LightingVariant,
+    /// For each uploaded object (those with triangles, in the scene's order): it gathers
+    /// `diffusion`'s lateral taps itself although the frame has a lateral map.
+    pub taps_objects: Vec<bool>,
+    /// Each uploaded object's box on screen, for the lateral map's compute dispatches.
+    pub object_rects: Vec<Option<[u32; 4]>>,
+}
+
+impl FramePlan {
+    /// The plan for `scene` drawn at `settings.width` x `settings.height` on an adapter with
+    /// `features`.
+    pub fn new(scene: &Scene, settings: &RenderSettings, features: AdapterFeatures) -> Self {
+        let (width, height) = (settings.width, settings.height);
+        let t = &settings.transmittance;
+        let lights = &scene.desc.lights;
+        let lateral_downsample = lateral_downsample(scene, settings, width, height);
+        let shadowed = lights.iter().any(|l| l.shadow_map_size > 0);
+        let diffusion_taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+        // Lights without a shadow map transmit nothing.
+        let transmitted_map = diffusion_taps && lateral_downsample > 1 && shadowed;
+        // Point lights' six faces are not gathered (bounce.wgsl): only the others count.
+        let bounced = lights
+            .iter()
+            .any(|l| l.shadow_map_size > 0 && l.kind != LightKind::Point);
+        let mut bounce_ring = 0;
+        if settings.bounce.enabled() && bounced && settings.sss.method != SssMethod::Texture {
+            if features.compute_storage {
+                bounce_ring = settings.bounce.ring;
+            } else {
+                log::warn!(
+                    "bounce: this adapter has no compute storage textures; rendering without it"
+                );
+            }
+        }
+        let bounce_layer =
+            (bounce_ring > 0 && lateral_downsample > 1).then_some(if transmitted_map {
+                TRANSMITTED_LAYERS
+            } else {
+                0
+            });
+        let layers = match bounce_layer {
+            Some(layer) => layer + 1,
+            None if transmitted_map => TRANSMITTED_LAYERS,
+            None => 0,
+        };
+        let lateral = if layers == 0 {
+            LateralShape::NONE
+        } else {
+            LateralShape {
+                downsample: lateral_downsample,
+                layers,
+                compute: t.lateral_pass == LateralPass::Compute && features.compute_storage,
+            }
+        };
+        let lighting = LightingVariant {
+            method: t.method.code(),
+            bounce: match (bounce_ring, bounce_layer) {
+                (0, _) => 0,
+                (_, Some(_)) => 1,
+                (_, None) => 2,
+            },
+            lateral: match (diffusion_taps, lateral_downsample > 1) {
+                (false, _) => 0,
+                (true, true) => 1,
+                (true, false) => 2,
+            },
+        };
+        Self {
+            width,
+            height,
+            lateral_downsample,
+            transmitted_map,
+            bounce_ring,
+            bounce_layer,
+            lateral,
+            lighting,
+            taps_objects: lateral_taps_objects(scene, settings, width, height, lateral_downsample),
+            object_rects: screen_rects(scene, width, height),
+        }
+    }
+
+    /// Writes what the shaders read of the plan into the lights' uniform: the lateral map's
+    /// reduction, the bounce's ring and layer.
+    pub fn write_lights(&self, lights: &mut LightsUniform) {
+        lights.lateral_downsample = self.lateral_downsample;
+        lights.bounce_ring = self.bounce_ring;
+        lights.bounce_layer = if self.transmitted_map {
+            TRANSMITTED_LAYERS
+        } else {
+            0
+        };
+    }
+}
+
+/// The lateral map's reduction for `scene` at `width` x `height` with `settings`
+/// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
+/// the translucent object in view nearest in those terms (`skin_pixel_mm`), so that the
+/// map's texels are the same millimetres at any resolution and zoom (a farther object whose
+/// texels come out too coarse gathers its own taps, [`lateral_taps_objects`]). 1 (no
+/// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
+/// transmitted light from its UV-space pass).
+pub fn lateral_downsample(
+    scene: &Scene,
+    settings: &RenderSettings,
+    width: u32,
+    height: u32,
+) -> u32 {
+    let t = &settings.transmittance;
+    let taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+    // The bounce is gathered on the same map (passes::bounce): it too changes over
+    // millimetres.
+    if !(taps || settings.bounce.enabled()) || settings.sss.method == SssMethod::Texture {
+        return 1;
+    }
+    let pixel_mm = skin_pixel_mm(scene, width, height)
+        .into_iter()
+        .flatten()
+        .fold(f32::INFINITY, f32::min);
+    crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
+}
+
+/// For each object of `scene` seen at `width` x `height`: the size of a pixel in its profile
+/// millimetres at the depth of its bounds' centre (at least the near plane), where it is
+/// translucent and may lie in view; `None` elsewhere.
+fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
+    let camera = camera_uniform(scene, width, height);
+    let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+    let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            if !(o.material.translucency > 0.0 && in_view(view_proj, o.world_bounds())) {
+                return None;
+            }
+            let (lo, hi) = o.world_bounds();
+            let depth = ((lo + hi) * 0.5 - position).dot(forward).max(camera.near);
+            let mm = depth / camera.focal_px / (world_per_mm(o) * o.material.translucency);
+            (mm.is_finite() && mm > 0.0).then_some(mm)
+        })
+        .collect()
+}
+
+/// Which of the uploaded objects (those with triangles, in the scene's order, as
+/// [`upload_objects`] makes them) gather `diffusion`'s lateral taps at each pixel although the
+/// frame has a lateral map of reduction `downsample`: skin so much farther than the nearest
+/// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
+/// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
+/// ([`LightingVariant::lateral`]); every other pixel reads the map with one that does not.
+pub fn lateral_taps_objects(
+    scene: &Scene,
+    settings: &RenderSettings,
+    width: u32,
+    height: u32,
+    downsample: u32,
+) -> Vec<bool> {
+    let t = &settings.transmittance;
+    let limit = crate::settings::MAX_TEXEL_FACTOR * t.lateral_texel_mm;
+    let coarse = |mm: Option<f32>| mm.is_some_and(|mm| downsample as f32 * mm > limit);
+    scene
+        .objects
+        .iter()
+        .zip(skin_pixel_mm(scene, width, height))
+        .filter(|(o, _)| !o.mesh.indices.is_empty())
+        .map(|(_, mm)| downsample > 1 && coarse(mm))
+        .collect()
+}
+
+/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the
+/// scene's order, as [`upload_objects`] makes them): the pixels `[x0, y0, x1, y1)` its world
+/// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
+/// where they lie outside the view. The lateral map's compute evaluation dispatches over each
+/// object's box alone ([`FramePlan::object_rects`]).
+pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 4]>> {
+    let camera = camera_uniform(scene, width, height);
+    let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+    let (w, h) = (width as f32, height as f32);
+    scene
+        .objects
+        .iter()
+        .filter(|o| !o.mesh.indices.is_empty())
+        .map(|o| {
+            let bounds = o.world_bounds();
+            if !in_view(view_proj, bounds) {
+                return None;
+            }
+            let (lo, hi) = bounds;
+            let mut min = glam::Vec2::splat(f32::INFINITY);
+            let mut max = glam::Vec2::splat(f32::NEG_INFINITY);
+            for c in crate::scene::box_corners(lo, hi) {
+                let clip = view_proj * c.extend(1.0);
+                // A corner at or behind the eye projects nowhere useful: the whole frame.
+                if !clip.w.is_finite() || clip.w <= 1e-6 {
+                    return Some([0, 0, width, height]);
+                }
+                let px = glam::Vec2::new(
+                    (clip.x / clip.w * 0.5 + 0.5) * w,
+                    (0.5 - clip.y / clip.w * 0.5) * h,
+                );
+                (min, max) = (min.min(px), max.max(px));
+            }
+            let x0 = min.x.floor().clamp(0.0, w) as u32;
+            let y0 = min.y.floor().clamp(0.0, h) as u32;
+            let x1 = max.x.ceil().clamp(0.0, w) as u32;
+            let y1 = max.y.ceil().clamp(0.0, h) as u32;
+            (x1 > x0 && y1 > y0).then_some([x0, y0, x1, y1])
+        })
+        .collect()
+}
+
+/// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
+/// frustum plane has all eight corners outside it.
+fn in_view(view_proj: Mat4, (lo, hi): (Vec3, Vec3)) -> bool {
+    let corners = crate::scene::box_corners(lo, hi).map(|c| view_proj * c.extend(1.0));
+    let outside = |f: &dyn Fn(&glam::Vec4) -> bool| corners.iter().all(f);
+    !(outside(&|c| c.x < -c.w)
+        || outside(&|c| c.x > c.w)
+        || outside(&|c| c.y < -c.w)
+        || outside(&|c| c.y > c.w)
+        || outside(&|c| c.z < 0.0)
+        || outside(&|c| c.z > c.w))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn downsample(scene: &Scene, settings: &RenderSettings, w: u32, h: u32) -> u32 {
+        lateral_downsample(scene, settings, w, h)
+    }
+
+    /// Each object's box on screen holds every vertex of it (the lateral map's compute
+    /// dispatch covers only the box), is far smaller than the frame for the default scene's
+    /// hand and wedge, and is the whole frame for an object reaching behind the camera.
+    #[test]
+    fn screen_rects_hold_every_vertex() {
+        let mut scene = Scene::default_scene();
+        let (w, h) = (256, 192);
+        let camera = camera_uniform(&scene, w, h);
+        let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+        let rects = screen_rects(&scene, w, h);
+        assert_eq!(rects.len(), scene.objects.len());
+        for (o, rect) in scene.objects.iter().zip(&rects) {
+            let [x0, y0, x1, y1] = rect.expect("the default scene's objects are in view");
+            assert!(
+                ((x1 - x0) * (y1 - y0)) < w * h / 2,
+                "{:?}: box {x0},{y0}..{x1},{y1} of a {w}x{h} frame",
+                o.name
+            );
+            for v in &o.mesh.vertices {
+                let c = view_proj
+                    * o.transform
+                        .transform_point3(Vec3::from(v.position))
+                        .extend(1.0);
+                let px = (c.x / c.w * 0.5 + 0.5) * w as f32;
+                let py = (0.5 - c.y / c.w * 0.5) * h as f32;
+                assert!(
+                    px >= x0 as f32 && px <= x1 as f32 && py >= y0 as f32 && py <= y1 as f32,
+                    "{:?}: vertex at ({px}, {py}) outside {x0},{y0}..{x1},{y1}",
+                    o.name
+                );
+            }
+        }
+        // The camera inside the hand's bounds, looking down the fingers to the wrist (the
+        // bounds reach past the near plane in front and behind the eye).
+        let (lo, hi) = scene.objects[0].world_bounds();
+        let centre = (lo + hi) * 0.5;
+        scene.desc.camera.position = centre.to_array();
+        scene.desc.camera.target = (centre - Vec3::Y).to_array();
+        scene.desc.camera.up = [0.0, 0.0, 1.0];
+        assert_eq!(screen_rects(&scene, w, h)[0], Some([0, 0, w, h]));
+    }
+
+    /// The map's texels stay about `lateral_texel_mm` on the skin: twice the pixels, twice
+    /// the reduction (up to 8), 2 for skin small on screen and none where it is smaller still.
+    #[test]
+    fn lateral_map_reduction_follows_the_skin_on_screen() {
+        let scene = Scene::default_scene();
+        let s = scene.desc.render.clone();
+        let (r256, r512) = (
+            downsample(&scene, &s, 256, 256),
+            downsample(&scene, &s, 512, 512),
+        );
+        assert_eq!((r256, r512), (3, 6));
+        assert_eq!(downsample(&scene, &s, 1280, 720), 8);
+        // Small on screen: two pixels a texel while that stays within MAX_TEXEL_FACTOR.
+        assert_eq!(downsample(&scene, &s, 64, 64), 2);
+        assert_eq!(downsample(&scene, &s, 32, 32), 1);
+        let mut per_pixel = s.clone();
+        per_pixel.transmittance.lateral_texel_mm = 0.0;
+        assert_eq!(downsample(&scene, &per_pixel, 512, 512), 1);
+    }
+
+    /// Skin whose texels would span more than `MAX_TEXEL_FACTOR` times `lateral_texel_mm`
+    /// gathers the taps itself: none of the default scene's objects, and every object but the
+    /// nearest once moved back to six times its distance along the view (the map stays sized
+    /// for the nearest).
+    #[test]
+    fn skin_too_far_for_the_map_gathers_its_own_taps() {
+        let scene = Scene::default_scene();
+        let s = scene.desc.render.clone();
+        let n = downsample(&scene, &s, 1280, 720);
+        let flags = lateral_taps_objects(&scene, &s, 1280, 720, n);
+        assert_eq!(flags.len(), scene.objects.len());
+        assert!(flags.iter().all(|&t| !t), "{flags:?}");
+        let pixel_mm = skin_pixel_mm(&scene, 1280, 720);
+        let nearest = (0..pixel_mm.len())
+            .filter(|&i| pixel_mm[i].is_some())
+            .min_by(|&a, &b| pixel_mm[a].partial_cmp(&pixel_mm[b]).unwrap())
+            .unwrap();
+        let camera = camera_uniform(&scene, 1280, 720);
+        let (eye, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+        let mut far = scene.clone();
+        for (i, o) in far.objects.iter_mut().enumerate() {
+            if i != nearest {
+                let (lo, hi) = o.world_bounds();
+                let depth = ((lo + hi) * 0.5 - eye).dot(forward);
+                o.transform = Mat4::from_translation(forward * 5.0 * depth) * o.transform;
+            }
+        }
+        assert_eq!(downsample(&far, &s, 1280, 720), n);
+        let flags = lateral_taps_objects(&far, &s, 1280, 720, n);
+        for (i, flag) in flags.iter().enumerate() {
+            let skin = pixel_mm[i].is_some();
+            assert_eq!(*flag, skin && i != nearest, "object {i}: {flags:?}");
+        }
+        // Without a map nothing is marked.
+        assert!(
+            lateral_taps_objects(&far, &s, 1280, 720, 1)
+                .iter()
+                .all(|&t| !t)
+        );
+    }
+
+    /// No map where nothing reads it: other transmittance methods without the bounce, no
+    /// taps, texture-space diffusion (its transmitted light comes from UV space), no
+    /// translucent object in view.
+    #[test]
+    fn no_lateral_map_where_nothing_reads_it() {
+        let scene = Scene::default_scene();
+        let mut s = scene.desc.render.clone();
+        let mut paper = s.clone();
+        paper.transmittance.method = TransmittanceMethod::Paper;
+        // The bounce alone is gathered on the map.
+        assert_eq!(downsample(&scene, &paper, 512, 512), 6);
+        s.bounce = crate::settings::BounceSettings::OFF;
+        paper.bounce = crate::settings::BounceSettings::OFF;
+        let mut no_taps = s.clone();
+        no_taps.transmittance.lateral_taps = 0;
+        let mut texture = s.clone();
+        texture.sss.method = SssMethod::Texture;
+        for settings in [paper, no_taps, texture] {
+            assert_eq!(downsample(&scene, &settings, 512, 512), 1);
+        }
+        let mut away = scene.clone();
+        let c = &mut away.desc.camera;
+        c.target = [c.position[0], c.position[1], c.position[2] + 1.0];
+        assert_eq!(downsample(&away, &s, 512, 512), 1);
+    }
+
+    fn plan(scene: &Scene, settings: &RenderSettings) -> FramePlan {
+        FramePlan::new(scene, settings, AdapterFeatures::ALL)
+    }
+
+    /// The frame's pipeline gathers the taps itself only without a map (objects too far for
+    /// the map get that variant through `taps_objects`).
+    #[test]
+    fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
+        let scene = Scene::default_scene();
+        let mut s = scene.desc.render.clone();
+        assert!(plan(&scene, &s).lateral_downsample > 1);
+        assert_eq!(plan(&scene, &s).lighting.lateral, 1);
+        s.transmittance.lateral_texel_mm = 0.0;
+        assert_eq!(plan(&scene, &s).lighting.lateral, 2);
+        s.transmittance.lateral_taps = 0;
+        assert_eq!(plan(&scene, &s).lighting.lateral, 0);
+        s.transmittance.lateral_taps = 12;
+        s.transmittance.method = TransmittanceMethod::Paper;
+        assert_eq!(plan(&scene, &s).lighting.lateral, 0);
+    }
+
+    /// The lateral pass evaluates the transmitted light only for `diffusion` with taps, a map
+    /// and a shadowed light, into two layers before the bounce's; the bounce alone takes a
+    /// map of one layer, and an adapter without compute storage has no bounce.
+    #[test]
+    fn the_transmitted_light_takes_two_layers_before_the_bounce() {
+        let scene = Scene::default_scene();
+        let mut s = scene.desc.render.clone();
+        s.bounce = crate::settings::BounceSettings::OFF;
+        let p = plan(&scene, &s);
+        assert!(p.transmitted_map);
+        assert_eq!(
+            (p.lateral.layers, p.bounce_layer),
+            (TRANSMITTED_LAYERS, None)
+        );
+        let mut unshadowed = scene.clone();
+        for l in &mut unshadowed.desc.lights {
+            l.shadow_map_size = 0;
+        }
+        let p = plan(&unshadowed, &s);
+        assert!(!p.transmitted_map, "no light has a shadow map");
+        assert_eq!(p.lateral, LateralShape::NONE);
+        let with_bounce = scene.desc.render.clone();
+        assert!(with_bounce.bounce.enabled());
+        let p = plan(&scene, &with_bounce);
+        assert_eq!(p.bounce_layer, Some(TRANSMITTED_LAYERS));
+        assert_eq!(p.lateral.layers, TRANSMITTED_LAYERS + 1);
+        assert_eq!(p.lighting.bounce, 1);
+        let mut paper = with_bounce.clone();
+        paper.transmittance.method = TransmittanceMethod::Paper;
+        let p = plan(&scene, &paper);
+        assert!(!p.transmitted_map);
+        assert_eq!((p.bounce_layer, p.lateral.layers), (Some(0), 1));
+        let none = AdapterFeatures {
+            compute_storage: false,
+        };
+        let p = FramePlan::new(&scene, &with_bounce, none);
+        assert_eq!(
+            (p.bounce_ring, p.bounce_layer, p.lighting.bounce),
+            (0, None, 0)
+        );
+        assert!(!p.lateral.compute);
+        for off in [
+            |s: &mut RenderSettings| s.transmittance.lateral_taps = 0,
+            |s: &mut RenderSettings| s.transmittance.lateral_texel_mm = 0.0,
+            |s: &mut RenderSettings| s.transmittance.method = TransmittanceMethod::Paper,
+        ] {
+            let mut other = with_bounce.clone();
+            off(&mut other);
+            assert!(!plan(&scene, &other).transmitted_map);
+        }
+    }
+}

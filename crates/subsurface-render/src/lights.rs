@@ -1,0 +1,179 @@
+//! The scene's lights on the GPU: each light's uniform and where its shadow maps lie in the
+//! shadow atlas.
+
+use glam::{Mat4, Vec3};
+
+use crate::error::RenderError;
+use crate::scene::{LightDesc, LightKind, Scene};
+use crate::settings::RenderSettings;
+use crate::uniforms::{LightUniform, LightsUniform, MAX_LIGHTS, mat};
+
+/// Where each light's shadow maps live in the shadow atlas (a 2-D array texture).
+#[derive(Clone, Debug)]
+pub struct ShadowLayer {
+    pub light: usize,
+    pub size: u32,
+    pub view_proj: Mat4,
+    /// Origin that `light_distance` measures from (the light, or the directional light's
+    /// shadow-camera origin).
+    pub origin: Vec3,
+}
+
+pub struct LightSetup {
+    pub uniform: LightsUniform,
+    pub layers: Vec<ShadowLayer>,
+    pub atlas_size: u32,
+}
+
+fn safe_up(dir: Vec3) -> Vec3 {
+    if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y }
+}
+
+/// Light-space matrices and uniforms, with the ambient light and transmittance of `settings`.
+/// Shadow near/far planes are fitted to the scene's bounding sphere so that depth precision is
+/// spent where the geometry is. What the frame is made of (the lateral map, the bounce) is the
+/// frame plan's to decide and to write ([`crate::frame_plan::FramePlan::write_lights`]).
+pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetup, RenderError> {
+    let transmittance = &settings.transmittance;
+    if scene.desc.lights.len() > MAX_LIGHTS {
+        return Err(RenderError::invalid(
+            "lights",
+            format!(
+                "at most {MAX_LIGHTS} lights are supported (got {})",
+                scene.desc.lights.len()
+            ),
+        ));
+    }
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let atlas_size = scene
+        .desc
+        .lights
+        .iter()
+        .map(|l| l.shadow_map_size)
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let mut uniform = LightsUniform::zeroed_default();
+    uniform.count = scene.desc.lights.len() as u32;
+    uniform.ambient = settings.ambient;
+    uniform.transmittance = transmittance.method.code();
+    uniform.normal_shrink = transmittance.normal_shrink;
+    uniform.thickness_filter = transmittance.thickness_filter;
+    uniform.lateral_taps = transmittance.lateral_taps;
+    uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);
+    uniform.bounce_cell_mm = settings.bounce.cell_mm;
+    let mut layers = Vec::new();
+    for (i, l) in scene.desc.lights.iter().enumerate() {
+        let (u, light_layers) = light_uniform(i, l, centre, radius, atlas_size, layers.len());
+        uniform.lights[i] = u;
+        layers.extend(light_layers);
+    }
+    Ok(LightSetup {
+        uniform,
+        layers,
+        atlas_size,
+    })
+}
+
+impl LightsUniform {
+    fn zeroed_default() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+fn light_uniform(
+    index: usize,
+    l: &LightDesc,
+    centre: Vec3,
+    radius: f32,
+    atlas_size: u32,
+    first_layer: usize,
+) -> (LightUniform, Vec<ShadowLayer>) {
+    let pos = Vec3::from(l.position);
+    let dir = (Vec3::from(l.target) - pos).normalize_or(Vec3::NEG_Z);
+    let colour = Vec3::from(l.color) * l.intensity;
+    let kind = match l.kind {
+        LightKind::Point => 0.0,
+        LightKind::Spot => 1.0,
+        LightKind::Directional => 2.0,
+    };
+    let far = ((pos - centre).length() + radius) * 1.05;
+    let near = (far * 1e-3)
+        .max(((pos - centre).length() - radius) * 0.5)
+        .max(far * 1e-4);
+    let mut views: Vec<(Mat4, Vec3)> = Vec::new();
+    let mut origin = pos;
+    if l.shadow_map_size > 0 {
+        match l.kind {
+            LightKind::Spot => {
+                let fov = (2.0 * l.outer_angle_deg.to_radians() * 1.05).min(179f32.to_radians());
+                let v = Mat4::look_at_rh(pos, pos + dir, safe_up(dir));
+                views.push((Mat4::perspective_rh(fov, 1.0, near, far) * v, pos));
+            }
+            LightKind::Point => {
+                let faces = [
+                    (Vec3::X, Vec3::NEG_Y),
+                    (Vec3::NEG_X, Vec3::NEG_Y),
+                    (Vec3::Y, Vec3::Z),
+                    (Vec3::NEG_Y, Vec3::NEG_Z),
+                    (Vec3::Z, Vec3::NEG_Y),
+                    (Vec3::NEG_Z, Vec3::NEG_Y),
+                ];
+                // Slightly wider than 90 degrees so PCF taps at face edges stay inside.
+                let proj = Mat4::perspective_rh(92f32.to_radians(), 1.0, near, far);
+                for (d, up) in faces {
+                    views.push((proj * Mat4::look_at_rh(pos, pos + d, up), pos));
+                }
+            }
+            LightKind::Directional => {
+                origin = centre - dir * (2.0 * radius);
+                let v = Mat4::look_at_rh(origin, centre, safe_up(dir));
+                let p = Mat4::orthographic_rh(
+                    -radius,
+                    radius,
+                    -radius,
+                    radius,
+                    0.5 * radius,
+                    3.5 * radius,
+                );
+                views.push((p * v, origin));
+            }
+        }
+    }
+    let mut vp = [[[0.0; 4]; 4]; 6];
+    for (k, (m, _)) in views.iter().enumerate() {
+        vp[k] = mat(*m);
+    }
+    let first = if views.is_empty() {
+        -1.0
+    } else {
+        first_layer as f32
+    };
+    let cos_outer = l.outer_angle_deg.to_radians().cos();
+    let cos_inner = l.inner_angle_deg.to_radians().cos().max(cos_outer + 1e-4);
+    let u = LightUniform {
+        position: origin.to_array(),
+        kind,
+        direction: dir.to_array(),
+        first_layer: first,
+        color: colour.to_array(),
+        shadow_bias: l.shadow_bias,
+        cos_outer,
+        cos_inner,
+        shadow_uv_scale: l.shadow_map_size.max(1) as f32 / atlas_size as f32,
+        atlas_texel: 1.0 / atlas_size as f32,
+        view_proj: vp,
+    };
+    let layers = views
+        .into_iter()
+        .map(|(view_proj, origin)| ShadowLayer {
+            light: index,
+            size: l.shadow_map_size,
+            view_proj,
+            origin,
+        })
+        .collect();
+    (u, layers)
+}

@@ -1,0 +1,471 @@
+//! The lighting pass: Lambert diffuse with albedo, the rough boundary's specular (Cook-Torrance
+//! with Beckmann facets and Smith masking, `subsurface_profile::specular`), normal
+//! maps, spot falloff, inverse-square attenuation and shadows filtered by percentage-closer
+//! gathers on the shadow maps' z-buffer (linear light distance stays for thickness). A depth
+//! pre-pass first keeps the nearest surface, so the shader runs once per pixel. It writes
+//! diffuse and specular apart (only diffuse is blurred by subsurface scattering), linear depth
+//! and the per-pixel SSS strength.
+//!
+//! Where the frame plan has a lateral map, its passes ([`crate::passes::lateral_map`]) run
+//! first and the lighting pass reads `diffusion`'s transmitted light and the bounce from it
+//! once per pixel, with a pipeline that holds no taps of its own.
+//!
+//! Group 0 (camera, lights, shadow maps, translucent shadow maps, flux pyramid) is built by
+//! [`frame_layout`]; group 1 is the object's (`gpu::object::object_layout`), group 2 the
+//! object's texture-space maps ([`maps::maps_layout`]), group 3 the lateral map
+//! ([`screen_layout`]). The texture-space pass draws its UV-space irradiance with the same
+//! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_lateral_map`].
+
+mod targets;
+
+pub use targets::{DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout};
+use targets::{dummy_lateral_map, screen_bind_group};
+
+use wgpu::util::DeviceExt;
+
+use crate::frame_plan::{FramePlan, LightingVariant};
+use crate::gpu::GpuContext;
+use crate::gpu::object::GpuObject;
+use crate::passes::lateral_map::LateralMapPass;
+use crate::passes::maps;
+use crate::passes::overrides::{BOUNCE_SOURCE, LATERAL_SOURCE, TRANSMITTANCE_METHOD};
+use crate::passes::util;
+use crate::timing::TimedPass;
+use crate::uniforms::{CameraUniform, LightsUniform};
+
+pub const SHADER: &str = concat!(
+    include_str!("../common.wgsl"),
+    include_str!("lighting.wgsl"),
+    include_str!("../shadow_lookup.wgsl"),
+    include_str!("../transmittance.wgsl"),
+    include_str!("../bounce.wgsl"),
+    include_str!("../lateral_map/lateral.wgsl")
+);
+
+/// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
+/// `shadow_depth` and `shadow_compare` in lighting.wgsl, `flux_position`, `flux_normal` and
+/// `flux_spread` in bounce.wgsl). Equal layouts are interchangeable,
+/// so other pipelines built on the lighting shader (the texture-space irradiance) may bind
+/// [`LightingPass::frame_bind_group`].
+pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    // Compute too: the lateral map's evaluation (lateral.wgsl, `cs_transmitted`) reads the
+    // camera, the lights and the shadow maps.
+    let stages = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX | stages);
+    // Shadow and translucent shadow map arrays: 32-bit floats, so not filterable.
+    let atlas = |binding| {
+        util::float_texture_entry(binding, stages, false, wgpu::TextureViewDimension::D2Array)
+    };
+    // The shadow maps' z-buffer, read through a comparison sampler: each gather tests a 2x2
+    // block of texels in the texture unit (hardware PCF).
+    let depth = wgpu::BindGroupLayoutEntry {
+        binding: 4,
+        visibility: stages,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lighting frame"),
+        entries: &[
+            uniform(0),
+            uniform(1),
+            atlas(2),
+            atlas(3),
+            depth,
+            // The flux pyramid (passes::bounce), also 32-bit floats.
+            atlas(6),
+            atlas(7),
+            atlas(8),
+            util::sampler_entry(5, stages, wgpu::SamplerBindingType::Comparison),
+        ],
+    })
+}
+
+/// The shadow maps the lighting pass reads ([`crate::passes::shadow::ShadowPass::maps`]).
+#[derive(Clone, Copy)]
+pub struct ShadowMaps<'a> {
+    /// Linear light distance and entry normal per texel (`Rg32Float` array): thickness.
+    pub atlas: &'a wgpu::TextureView,
+    /// The same layers' z-buffer (`Depth32Float` array): percentage-closer filtering through
+    /// a comparison sampler.
+    pub depth: &'a wgpu::TextureView,
+    /// The flux pyramid's position and normal sums (`bounce::FluxPyramid`), where the
+    /// bounce is gathered.
+    pub flux: Option<[&'a wgpu::TextureView; 3]>,
+}
+
+/// The lighting pass's `fs_main` built for `variant`.
+fn lighting_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    variant: LightingVariant,
+) -> wgpu::RenderPipeline {
+    util::MeshPipeline {
+        label: "lighting",
+        layout,
+        module,
+        vertex: "vs_main",
+        fragment: "fs_main",
+        targets: &[RADIANCE_FORMAT, RADIANCE_FORMAT, DEPTH_FORMAT, SSS_FORMAT],
+        // Not culled: glTF skin meshes are often open (wrists, necks) and the shader flips
+        // the normal of back faces.
+        cull_mode: None,
+        depth: util::DepthTest::Prepassed,
+        constants: &[
+            (TRANSMITTANCE_METHOD, f64::from(variant.method)),
+            (BOUNCE_SOURCE, f64::from(variant.bounce)),
+            (LATERAL_SOURCE, f64::from(variant.lateral)),
+        ],
+    }
+    .create(device)
+}
+
+pub struct LightingPass {
+    /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
+    prepass: wgpu::RenderPipeline,
+    /// `fs_main` built per [`LightingVariant`], each kept once built: switching methods back
+    /// and forth in the viewer compiles each once.
+    pipelines: Vec<(LightingVariant, wgpu::RenderPipeline)>,
+    /// The index in `pipelines` of the plan's variant.
+    current: usize,
+    /// Where `current` reads the lateral map: the index in `pipelines` of its variant that
+    /// gathers the taps at each pixel instead, for the objects `taps_objects` marks (skin too
+    /// far for the map's texels, the plan's `taps_objects`).
+    taps: Option<usize>,
+    taps_objects: Vec<bool>,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    /// The lateral map's passes, on the same shader and groups.
+    lateral: LateralMapPass,
+    /// Group 3 for pipelines that take the screen layout but never read the map.
+    no_lateral_map: wgpu::BindGroup,
+    frame_bind_group: wgpu::BindGroup,
+    /// Group 2 for objects without texture-space maps.
+    default_maps: wgpu::BindGroup,
+    /// Written only through [`Self::prepare`], with the pipelines of the same plan.
+    camera: wgpu::Buffer,
+    lights: wgpu::Buffer,
+}
+
+impl LightingPass {
+    /// Without texture-space maps or translucent shadow maps.
+    pub fn new(
+        ctx: &GpuContext,
+        object_layout: &wgpu::BindGroupLayout,
+        camera: &CameraUniform,
+        lights: &LightsUniform,
+        shadow: ShadowMaps<'_>,
+        plan: &FramePlan,
+    ) -> Self {
+        let maps_layout = maps::maps_layout(&ctx.device);
+        let tsm = maps::dummy_tsm_view(&ctx.device);
+        let uniforms = (camera, lights);
+        Self::with_maps(
+            ctx,
+            [object_layout, &maps_layout],
+            uniforms,
+            shadow,
+            &tsm,
+            plan,
+        )
+    }
+
+    /// `layouts`: the objects' group 1 ([`crate::gpu::object::object_layout`]) and their
+    /// texture-space maps' group 2 ([`maps::maps_layout`]); `tsm_atlas` the translucent
+    /// shadow maps (`Rg32Float` array, same layers as the shadow maps).
+    pub fn with_maps(
+        ctx: &GpuContext,
+        layouts: [&wgpu::BindGroupLayout; 2],
+        (camera, lights): (&CameraUniform, &LightsUniform),
+        shadow: ShadowMaps<'_>,
+        tsm_atlas: &wgpu::TextureView,
+        plan: &FramePlan,
+    ) -> Self {
+        let [object_layout, maps_layout] = layouts;
+        let device = &ctx.device;
+        let shadow_compare = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow compare"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            // Lit where the receiver's biased depth is at most the occluder's.
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let no_flux = crate::passes::bounce::dummy_views(device);
+        let flux = shadow
+            .flux
+            .unwrap_or([&no_flux[0], &no_flux[1], &no_flux[2]]);
+        let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
+        let frame_layout = frame_layout(device);
+        let buffer = |label, contents| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        let camera = buffer("camera", bytemuck::bytes_of(camera));
+        let lights = buffer("lights", bytemuck::bytes_of(lights));
+        let view = wgpu::BindingResource::TextureView;
+        let frame_bind_group = util::bind_group(
+            device,
+            "lighting frame",
+            &frame_layout,
+            [
+                (0, camera.as_entire_binding()),
+                (1, lights.as_entire_binding()),
+                (2, view(shadow.atlas)),
+                (3, view(tsm_atlas)),
+                (4, view(shadow.depth)),
+                (5, wgpu::BindingResource::Sampler(&shadow_compare)),
+                (6, view(flux[0])),
+                (7, view(flux[1])),
+                (8, view(flux[2])),
+            ],
+        );
+        let prepass_layout = util::pipeline_layout(
+            device,
+            "depth prepass",
+            &[&frame_layout, object_layout, maps_layout],
+        );
+        let layout = util::pipeline_layout(
+            device,
+            "lighting",
+            &[
+                &frame_layout,
+                object_layout,
+                maps_layout,
+                &screen_layout(device),
+            ],
+        );
+        let lateral = LateralMapPass::new(
+            device,
+            &module,
+            [&frame_layout, object_layout, maps_layout],
+            plan,
+        );
+        let pipeline = lighting_pipeline(device, &layout, &module, plan.lighting);
+        // Meshes drawn without culling in any order would shade every surface a pixel covers
+        // that lands before the nearest one (the back of a head, the far side of a hand): a
+        // depth-only pass first leaves the lighting shader one fragment per pixel.
+        let prepass = util::depth_prepass_pipeline(device, &prepass_layout, &module, "vs_main");
+        let default_maps = maps::default_maps_bind_group(device, maps_layout);
+        let mut pass = Self {
+            prepass,
+            pipelines: vec![(plan.lighting, pipeline)],
+            taps: None,
+            taps_objects: Vec::new(),
+            current: 0,
+            module,
+            layout,
+            lateral,
+            no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
+            default_maps,
+            frame_bind_group,
+            camera,
+            lights,
+        };
+        pass.set_taps_objects(device, plan);
+        pass
+    }
+
+    /// Group 0 (see [`frame_layout`]): camera, lights, shadow maps, translucent shadow maps.
+    pub fn frame_bind_group(&self) -> &wgpu::BindGroup {
+        &self.frame_bind_group
+    }
+
+    /// Group 3 (see [`screen_layout`]) without a lateral map, for pipelines on the lighting
+    /// shader that never read it.
+    pub fn no_lateral_map(&self) -> &wgpu::BindGroup {
+        &self.no_lateral_map
+    }
+
+    /// Writes the per-frame uniforms (the camera and the lights) and takes `plan`'s pipelines,
+    /// building those it has not built yet.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        camera: &CameraUniform,
+        lights: &LightsUniform,
+        plan: &FramePlan,
+    ) {
+        ctx.queue
+            .write_buffer(&self.camera, 0, bytemuck::bytes_of(camera));
+        ctx.queue
+            .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
+        self.current = self.pipeline_index(&ctx.device, plan.lighting);
+        self.set_taps_objects(&ctx.device, plan);
+        self.lateral.prepare(&ctx.device, plan);
+    }
+
+    /// The index in `pipelines` of `key`'s pipeline, built the first time it is asked for.
+    fn pipeline_index(&mut self, device: &wgpu::Device, key: LightingVariant) -> usize {
+        match self.pipelines.iter().position(|(k, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                let pipeline = lighting_pipeline(device, &self.layout, &self.module, key);
+                self.pipelines.push((key, pipeline));
+                self.pipelines.len() - 1
+            }
+        }
+    }
+
+    /// The objects (`objects[i]` of [`Self::encode_with_maps`]) that gather `diffusion`'s
+    /// lateral taps at each pixel although the frame reads them from the lateral map (the
+    /// plan's `taps_objects`: skin whose texels would be too coarse), with their pipeline
+    /// built the first time. Ignored where the current variant reads no map.
+    fn set_taps_objects(&mut self, device: &wgpu::Device, plan: &FramePlan) {
+        let key = self.pipelines[self.current].0;
+        self.taps = (key.lateral == 1 && plan.taps_objects.contains(&true))
+            .then(|| self.pipeline_index(device, LightingVariant { lateral: 2, ..key }));
+        self.taps_objects = plan.taps_objects.clone();
+    }
+
+    /// The lighting pass's draws: each object with the current pipeline, or its variant that
+    /// gathers the taps itself where the plan marked the object.
+    fn draw_lit_objects(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+    ) {
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
+        let mut bound = None;
+        for (i, o) in objects.iter().enumerate() {
+            let index = match self.taps {
+                Some(taps) if self.taps_objects.get(i) == Some(&true) => taps,
+                _ => self.current,
+            };
+            if bound != Some(index) {
+                pass.set_pipeline(&self.pipelines[index].1);
+                bound = Some(index);
+            }
+            pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
+            o.draw(pass);
+        }
+    }
+
+    /// The depth pre-pass into `zbuffer` (cleared), timed as `timed`: the nearest surface per
+    /// pixel, for the [`util::DepthTest::Prepassed`] pipelines after it.
+    fn encode_prepass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        zbuffer: &wgpu::TextureView,
+        timed: &str,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let timer = TimedPass::begin(profiler, timed, encoder);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth prepass"),
+                color_attachments: &[],
+                depth_stencil_attachment: util::depth_attachment(
+                    zbuffer,
+                    wgpu::LoadOp::Clear(1.0),
+                    wgpu::StoreOp::Store,
+                ),
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            util::draw_objects(
+                &mut pass,
+                &self.prepass,
+                &self.frame_bind_group,
+                objects,
+                maps,
+                &self.default_maps,
+            );
+        }
+        timer.end(profiler, encoder);
+    }
+
+    /// The lateral map's passes where the plan has them, the depth pre-pass and the lighting
+    /// pass into `targets`, with each object's texture-space bind group (`maps[i]` for
+    /// `objects[i]`; objects beyond `maps` are lit plainly).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_with_maps(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &LightingTargets,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        background: [f32; 3],
+        far: f32,
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        if let Some(lateral) = &targets.lateral
+            && self.lateral.runs()
+        {
+            self.lateral.encode(
+                encoder,
+                lateral,
+                &self.frame_bind_group,
+                objects,
+                maps,
+                &self.default_maps,
+                profiler,
+            );
+        }
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (diffuse, specular, depth, sss) = (
+            view(&targets.diffuse),
+            view(&targets.specular),
+            view(&targets.depth),
+            view(&targets.sss),
+        );
+        let attach = |v, c| util::color_attachment(v, wgpu::LoadOp::Clear(c));
+        let bg = wgpu::Color {
+            r: background[0] as f64,
+            g: background[1] as f64,
+            b: background[2] as f64,
+            a: 1.0,
+        };
+        self.encode_prepass(
+            encoder,
+            &targets.zbuffer,
+            "depth prepass",
+            objects,
+            maps,
+            profiler,
+        );
+        let timer = TimedPass::begin(profiler, "lighting", encoder);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("lighting"),
+                color_attachments: &[
+                    attach(&diffuse, bg),
+                    attach(&specular, wgpu::Color::TRANSPARENT),
+                    attach(
+                        &depth,
+                        wgpu::Color {
+                            r: far as f64,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
+                        },
+                    ),
+                    attach(&sss, wgpu::Color::TRANSPARENT),
+                ],
+                depth_stencil_attachment: util::depth_attachment(
+                    &targets.zbuffer,
+                    wgpu::LoadOp::Load,
+                    wgpu::StoreOp::Discard,
+                ),
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(3, &targets.screen, &[]);
+            self.draw_lit_objects(&mut pass, objects, maps);
+        }
+        timer.end(profiler, encoder);
+    }
+}

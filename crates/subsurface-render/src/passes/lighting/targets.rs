@@ -1,0 +1,159 @@
+//! The lighting pass's targets (what it writes and screen-space SSS reads) and its group 3:
+//! the lateral map it reads, or a stand-in.
+
+use crate::frame_plan::{LateralShape, TRANSMITTED_LAYERS};
+use crate::gpu::GpuContext;
+use crate::passes::lateral_map::{LATERAL_FORMAT, LateralTargets};
+use crate::passes::util;
+
+pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// r = SSS strength, g = scene units per profile millimetre, b = profile index (exact in f16
+/// up to 2048), a unused. Half floats keep the four targets within the 32 bytes per sample
+/// every adapter allows.
+pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// What the lighting pass writes, and what screen-space SSS reads.
+pub struct LightingTargets {
+    pub width: u32,
+    pub height: u32,
+    /// Diffuse radiance (irradiance x albedo), linear HDR: the image that is blurred.
+    pub diffuse: wgpu::Texture,
+    /// Specular radiance, linear HDR: added after the blur.
+    pub specular: wgpu::Texture,
+    /// Linear view depth in scene units (the camera's far plane where nothing was drawn).
+    pub depth: wgpu::Texture,
+    /// r = SSS strength (0 = not skin), g = scene units per profile millimetre.
+    pub sss: wgpu::Texture,
+    pub(super) zbuffer: wgpu::TextureView,
+    /// `diffusion`'s lateral light at reduced resolution, when the targets were made with a
+    /// `lateral_downsample` above 1.
+    pub lateral: Option<LateralTargets>,
+    /// Group 3 of the lighting pass ([`screen_layout`]): the lateral map, or a 1x1 stand-in.
+    pub(super) screen: wgpu::BindGroup,
+}
+
+/// Layout of group 3 of the lighting pass (`lateral_map` in lighting.wgsl). Pipelines built on
+/// the lighting shader that do not read the map (the texture-space irradiance) take the same
+/// layout and bind `LightingPass::no_lateral_map`.
+pub fn screen_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lighting screen"),
+        entries: &[util::float_texture_entry(
+            0,
+            wgpu::ShaderStages::FRAGMENT,
+            false,
+            wgpu::TextureViewDimension::D2Array,
+        )],
+    })
+}
+
+pub(super) fn screen_bind_group(device: &wgpu::Device, map: &wgpu::Texture) -> wgpu::BindGroup {
+    let view = map.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    util::bind_group(
+        device,
+        "lighting screen",
+        &screen_layout(device),
+        [(0, wgpu::BindingResource::TextureView(&view))],
+    )
+}
+
+pub(super) fn dummy_lateral_map(device: &wgpu::Device) -> wgpu::Texture {
+    util::texture_2d(
+        device,
+        "no lateral map",
+        1,
+        1,
+        1,
+        LATERAL_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+}
+
+impl LightingTargets {
+    /// Without a lateral map: `diffusion` runs its lateral taps at every pixel.
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
+        Self::with_lateral(ctx, width, height, LateralShape::NONE)
+    }
+
+    /// With `diffusion`'s lateral map of `lateral`'s shape (none for a reduction of 1).
+    pub fn with_lateral(ctx: &GpuContext, width: u32, height: u32, lateral: LateralShape) -> Self {
+        let device = &ctx.device;
+        let (lateral, screen) = lateral_targets(ctx, width, height, lateral);
+        let target = |label, format| util::render_target(device, label, width, height, format);
+        Self {
+            width,
+            height,
+            // Storage too where the adapter can: the workgroup fetch's vertical SSS pass
+            // writes it from a compute shader.
+            diffuse: util::render_target_with(
+                device,
+                "diffuse",
+                width,
+                height,
+                RADIANCE_FORMAT,
+                if util::supports_compute_storage(device) {
+                    wgpu::TextureUsages::STORAGE_BINDING
+                } else {
+                    wgpu::TextureUsages::empty()
+                },
+            ),
+            specular: target("specular", RADIANCE_FORMAT),
+            depth: target("linear depth", DEPTH_FORMAT),
+            sss: target("sss strength", SSS_FORMAT),
+            zbuffer: util::depth_buffer(device, "z-buffer", width, height),
+            lateral,
+            screen,
+        }
+    }
+
+    /// The lateral map's reduction (1 without one).
+    pub fn lateral_downsample(&self) -> u32 {
+        self.lateral.as_ref().map_or(1, |l| l.downsample)
+    }
+
+    /// Where the lateral map holds the transmitted light: whether a compute shader evaluates
+    /// it (`LateralPass::Compute` on an adapter that runs it) rather than the map's fragment
+    /// shader. None without such a map.
+    pub fn lateral_computed(&self) -> Option<bool> {
+        self.lateral
+            .as_ref()
+            .filter(|l| l.layer_count >= TRANSMITTED_LAYERS)
+            .map(LateralTargets::computed)
+    }
+
+    /// The shape of the lateral map these targets hold.
+    pub fn lateral_shape(&self) -> LateralShape {
+        self.lateral
+            .as_ref()
+            .map_or(LateralShape::NONE, LateralTargets::shape)
+    }
+
+    /// A new lateral map of `lateral`'s shape, the other targets kept: the reduction follows
+    /// the skin's size on screen, so a camera moving nearer changes it without a new frame
+    /// size, and a light added to the scene may need a layer more.
+    pub fn set_lateral(&mut self, ctx: &GpuContext, lateral: LateralShape) {
+        (self.lateral, self.screen) = lateral_targets(ctx, self.width, self.height, lateral);
+    }
+}
+
+/// The lateral map of a `width` x `height` frame of `shape` (none for a reduction of 1) and
+/// the lighting pass's group 3 that reads it (a 1x1 stand-in without one).
+fn lateral_targets(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    shape: LateralShape,
+) -> (Option<LateralTargets>, wgpu::BindGroup) {
+    let device = &ctx.device;
+    let lateral = (shape.downsample > 1 && shape.layers > 0)
+        .then(|| LateralTargets::new(ctx, width, height, shape));
+    let screen = match &lateral {
+        Some(l) => screen_bind_group(device, &l.map),
+        None => screen_bind_group(device, &dummy_lateral_map(device)),
+    };
+    (lateral, screen)
+}
