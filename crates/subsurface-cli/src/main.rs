@@ -46,6 +46,9 @@ enum Command {
     ExportMitsuba(export_mitsuba::ExportArgs),
     /// Render a scene and report its errors against a path-traced reference EXR.
     Compare(compare::CompareArgs),
+    /// List every setting of the [render] table by key (as --set and bench --vary take it),
+    /// with the scene's value (the default without a scene), its unit and what it does.
+    Settings(settings_args::SettingsListArgs),
     /// Interactive viewer: orbit/fly cameras, light controls, every parameter live, split-screen
     /// comparisons and per-pass GPU timings.
     View(view::ViewArgs),
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::ExportMitsuba(a) => export_mitsuba::run(a),
         Command::Compare(a) => compare::run(a),
         Command::View(a) => view::run(a),
+        Command::Settings(a) => settings_args::list(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

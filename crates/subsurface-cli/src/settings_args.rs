@@ -115,6 +115,23 @@ pub struct SettingsArgs {
     /// (0.1..=50) [default: render.bounce.cell_mm, 2].
     #[arg(long, value_name = "MM")]
     pub bounce_cell_mm: Option<f32>,
+    /// Any setting of the scene's [render] table by its key, after the flags above, e.g.
+    /// --set render.sss.samples=9 --set transmittance.method=paper (values in TOML syntax; a
+    /// bare word is a string). `subsurface settings` lists every key with its default.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
+    pub set: Vec<(String, String)>,
+}
+
+/// Parses `KEY=VALUE` (the value may hold further `=`).
+pub fn parse_key_value(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected KEY=VALUE, e.g. render.sss.samples=9 (got {s:?})"))?;
+    let k = k.trim();
+    if k.is_empty() {
+        return Err(format!("the key is empty in {s:?}"));
+    }
+    Ok((k.to_string(), v.trim().to_string()))
 }
 
 /// The flag that sets a `[render]` field (`sss.samples` -> `--samples`), for error messages.
@@ -166,6 +183,10 @@ impl SettingsArgs {
         }
         if let Err(e) = r.validate() {
             anyhow::bail!("{}: {}", flag_of(&e.field), e.message);
+        }
+        for (key, value) in &self.set {
+            r.set(key, value)
+                .map_err(|e| anyhow::anyhow!("--set {e}"))?;
         }
         if let Some(w) = self.sss_width {
             anyhow::ensure!(
@@ -231,6 +252,38 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
             "expected three comma-separated numbers R,G,B (got {s:?})"
         )),
     }
+}
+
+#[derive(Args, Debug)]
+pub struct SettingsListArgs {
+    /// Scene file whose values to show (default: the embedded default scene).
+    pub scene: Option<PathBuf>,
+}
+
+/// `subsurface settings`: one line per key of `[render]`.
+pub fn list(args: &SettingsListArgs) -> Result<()> {
+    let scene = load_scene(args.scene.as_ref(), None)?;
+    let values = scene.desc.render.entries();
+    let mut out = String::new();
+    for d in subsurface_render::SETTINGS {
+        let value = values
+            .iter()
+            .find(|(k, _)| k == d.key)
+            .map_or(String::new(), |(_, v)| {
+                subsurface_render::settings::value_text(v)
+            });
+        let unit = if d.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" [{}]", d.unit)
+        };
+        out.push_str(&format!(
+            "render.{:<31} = {:<24} {}{unit}\n",
+            d.key, value, d.doc
+        ));
+    }
+    crate::output::print_summary(false, &out);
+    Ok(())
 }
 
 /// Loads the scene named on the command line (or the default) and applies `--model`.
@@ -340,5 +393,27 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.starts_with("--samples: must be odd"), "{e}");
+        let args = SettingsArgs {
+            samples: Some(9),
+            set: vec![parse_key_value("render.sss.samples = 11").unwrap()],
+            ..Default::default()
+        };
+        args.apply(&mut scene).unwrap();
+        assert_eq!(
+            scene.desc.render.sss.samples, 11,
+            "--set comes after the flags"
+        );
+        let e = SettingsArgs {
+            set: vec![parse_key_value("render.sss.sampels=9").unwrap()],
+            ..Default::default()
+        }
+        .apply(&mut scene)
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("--set render.sss.sampels: unknown key"),
+            "{e}"
+        );
+        assert!(parse_key_value("samples").is_err());
     }
 }

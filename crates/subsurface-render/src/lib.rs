@@ -27,8 +27,8 @@ pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
     BounceSettings, DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE,
-    MAX_TEXEL_FACTOR, RenderSettings, SssFetch, SssMethod, SssSettings, TransmittanceMethod,
-    TransmittanceSettings,
+    MAX_TEXEL_FACTOR, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, SssSettings,
+    TransmittanceMethod, TransmittanceSettings,
 };
 pub use timing::PassTiming;
 

@@ -3,10 +3,12 @@
 //! two sides are clones of it, so every setting has one name, one unit and one default.
 
 mod bounce;
+mod keys;
 mod sss;
 mod transmittance;
 
 pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
+pub use keys::{SETTINGS, SettingDoc, value_text};
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{
     DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,

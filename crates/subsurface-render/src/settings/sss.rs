@@ -102,7 +102,8 @@ pub struct SssSettings {
     /// its weight stands for (Jimenez et al. 2015's jittering, which lets 7 taps stand in for
     /// many): the banding of few taps becomes fine per-pixel noise.
     pub jitter: bool,
-    /// Screen space: how a tap fetches its texels (`packed` or `direct`; same image).
+    /// Screen space: how a tap fetches its texels (`packed`, `workgroup` or `direct`; the
+    /// same image at a different cost).
     pub fetch: SssFetch,
     /// Screen space: weaken taps by their depth difference, so the blur follows the surface
     /// instead of crossing silhouettes and depth edges (Jimenez et al. 2009).
@@ -129,7 +130,7 @@ impl Default for SssSettings {
             method: SssMethod::Separable,
             samples: DEFAULT_SAMPLES,
             jitter: false,
-            fetch: SssFetch::Packed,
+            fetch: SssFetch::default(),
             follow_surface: true,
             edge_mm: 3.0,
             min_sigma_px: 0.25,
