@@ -4,34 +4,33 @@
 use serde::Serialize;
 use subsurface_render::passes::traffic::{self, PassTraffic};
 
-use super::{Report, Run, sss_ms};
-
 /// One pass's byte model at the run's size beside its measured time.
 #[derive(Serialize)]
 pub(super) struct Traffic {
     #[serde(flatten)]
-    model: PassTraffic,
-    ms: f64,
+    pub(super) model: PassTraffic,
+    pub(super) ms: f64,
     /// Time the compulsory bytes take at `--bandwidth`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    bound_ms: Option<f64>,
+    pub(super) bound_ms: Option<f64>,
     /// `ms / bound_ms`: how many times the memory limit the pass takes.
     #[serde(skip_serializing_if = "Option::is_none")]
-    over_bound: Option<f64>,
+    pub(super) over_bound: Option<f64>,
 }
 
-/// The byte models of the run's modelled passes (screen-space SSS, the baseline copy) with
-/// their measured times and, given a bandwidth, the ratio to the memory bound.
+/// The byte models of a `w` x `h` frame's modelled passes (screen-space SSS with `sss`, the
+/// baseline copy) with their measured times (`[sss, copy]` ms) and, given a bandwidth, the
+/// ratio to the memory bound.
 pub(super) fn traffic_of(
-    run: &Run,
+    (w, h): (u32, u32),
     sss: &subsurface_render::SssSettings,
+    [sss_ms, copy_ms]: [f64; 2],
     gbps: Option<f64>,
 ) -> Vec<Traffic> {
-    let (w, h) = (run.width, run.height);
     let models = traffic::sss_traffic(sss, w, h)
         .into_iter()
-        .map(|m| (m, sss_ms(&run.passes)))
-        .chain([(traffic::copy_traffic(w, h), run.copy_ms)]);
+        .map(|m| (m, sss_ms))
+        .chain([(traffic::copy_traffic(w, h), copy_ms)]);
     models
         .map(|(model, ms)| {
             let bound_ms = gbps.map(|g| model.bound_ms(g));
@@ -63,50 +62,4 @@ pub(super) fn flip_means(
         .map(|(v, _)| *v)
         .collect();
     (mean(&all), (!on_skin.is_empty()).then(|| mean(&on_skin)))
-}
-
-/// The byte-model table: per run and modelled pass, the bytes, the measured time and (with
-/// --bandwidth) its ratio to the memory bound.
-pub(super) fn traffic_table(report: &Report) -> String {
-    let mut out = String::from(
-        "\nmemory traffic (compulsory: each input texel read once, each output texel written \
-         once; per tap: every texel each tap filters, no cache)\n",
-    );
-    out += &format!(
-        "{:>10} {:>10} {:>9} {:>7} {:>6} {:>9} {:>9} {:>11} {:>9} {:>9} {:>8}\n",
-        "size",
-        "sss",
-        "fetch",
-        "jitter",
-        "pass",
-        "read MB",
-        "write MB",
-        "per-tap MB",
-        "ms",
-        "bound ms",
-        "x bound"
-    );
-    let mb = |b: u64| b as f64 / 1e6;
-    for r in &report.runs {
-        for t in &r.traffic {
-            out += &format!(
-                "{:>10} {:>10} {:>9} {:>7} {:>6} {:>9.1} {:>9.1} {:>11.1} {:>9.3} {:>9} {:>8}\n",
-                format!("{}x{}", r.width, r.height),
-                r.sss,
-                r.fetch,
-                if r.jitter { "yes" } else { "no" },
-                t.model.name,
-                mb(t.model.read_bytes),
-                mb(t.model.write_bytes),
-                mb(t.model.read_bytes_per_tap + t.model.write_bytes),
-                t.ms,
-                t.bound_ms.map_or("-".into(), |b| format!("{b:.3}")),
-                t.over_bound.map_or("-".into(), |x| format!("{x:.1}")),
-            );
-        }
-    }
-    if let Some(g) = report.bandwidth_gbps {
-        out += &format!("bound: compulsory bytes at --bandwidth {g} GB/s\n");
-    }
-    out
 }
