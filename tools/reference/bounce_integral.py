@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """One bounce of each light between the skin's parts, integrated exactly: what a real-time
-renderer without global illumination leaves out (docs/fidelity.md, finding 9).
+renderer without global illumination leaves out (docs/lab/fidelity.md, finding 9).
 
     subsurface export-mitsuba SCENE.toml --out DIR
     subsurface compare REF.exr SCENE.toml --linear OURS.exr

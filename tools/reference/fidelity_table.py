@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes docs/fidelity.md (the error of every method x canonical scene against the committed
+"""Writes docs/lab/fidelity.md (the error of every method x canonical scene against the committed
 path-traced references, and the default method's against those rendered without light between
 parts, references/no-bounce/), references/fidelity.json (the values the regression guard in
 crates/subsurface-cli/tests/fidelity.rs checks against) and references/compare/*.png.
@@ -137,7 +137,7 @@ def main():
 
 
 def write_markdown(results, no_bounce):
-    path = os.path.join(ROOT, "docs/fidelity.md")
+    path = os.path.join(ROOT, "docs/lab/fidelity.md")
     with open(path) as f:
         text = f.read()
     begin, end = "<!-- table: begin (tools/reference/fidelity_table.py) -->", "<!-- table: end -->"
@@ -186,7 +186,7 @@ def write_markdown(results, no_bounce):
             lines.append("")
             for key, v in combos.items():
                 if key.endswith("+diffusion") or key == "none+off":
-                    lines.append(f"![{name} {key} edge](../{v['edge']['plot']})")
+                    lines.append(f"![{name} {key} edge](../../{v['edge']['plot']})")
                     lines.append("")
         if first.get("thickness"):
             lines.append("Against thickness (pixels binned by the thickness the light crosses, 1 mm bins): worst "
@@ -201,13 +201,13 @@ def write_markdown(results, no_bounce):
             lines.append("")
             for key, v in combos.items():
                 if key.endswith("+diffusion") or key in ("none+off", "separable+paper"):
-                    lines.append(f"![{name} {key} thickness](../{v['thickness']['plot']})")
+                    lines.append(f"![{name} {key} thickness](../../{v['thickness']['plot']})")
                     lines.append("")
         for key, v in combos.items():
             if v["image"]:
                 lines.append(f"`{key}` (real-time | reference | FLIP):")
                 lines.append("")
-                lines.append(f"![{name} {key}](../{v['image']})")
+                lines.append(f"![{name} {key}](../../{v['image']})")
                 lines.append("")
     if no_bounce:
         lines.append("### Light between parts")

@@ -36,7 +36,7 @@ events inside. Light that one part of the skin sends another across the air (a f
 glow on its neighbour, a reflection off a cheek into the nose's shadow) is left out, and
 light that leaves the medium and enters it again elsewhere, even on the same mesh, with it.
 
-`render_reference.py --no-bounce` renders with it (docs/fidelity.md, finding 9). It is the
+`render_reference.py --no-bounce` renders with it (docs/lab/fidelity.md, finding 9). It is the
 primal part of Mitsuba 3.9.1's `prbvolpath` integrator (its license above), with that one
 rule added; on a scene where no path can leave one surface and reach another (a single convex
 part) it renders what `volpath` does.

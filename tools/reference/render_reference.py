@@ -11,7 +11,7 @@ shared library is found (DRJIT_LIBLLVM_PATH, else Debian's libLLVM-19 from the `
 package), and `scalar_rgb`, which runs on any CPU, otherwise; `cuda_ad_rgb` on an NVIDIA GPU. The image is rendered in passes of --pass-spp samples, each with its own seed derived
 from --seed (so the result depends only on --seed and --spp), and progress is printed after
 every pass. The output is a linear-radiance RGB EXR (half float), the same radiance units as our
-renderer's diffuse + specular (the exporter scales the emitters, docs/fidelity.md).
+renderer's diffuse + specular (the exporter scales the emitters, docs/lab/fidelity.md).
 
 Beside it, OUT.stderr.exr holds each pixel's standard error: the spread of the per-pass images
 divided by sqrt(number of passes). A path-traced reference is never noise-free; with this the
@@ -32,7 +32,7 @@ samples) rendered grey, where exact slab transport (adding-doubling) predicts 0.
 `--no-bounce` renders the scene without light between parts (no_bounce.py): a path ends where,
 after leaving a surface into the air, it reaches another surface. What is left is what a
 renderer without global illumination computes; the difference from the full reference is the
-light one part sends another (docs/fidelity.md, finding 9). It needs a vectorised variant.
+light one part sends another (docs/lab/fidelity.md, finding 9). It needs a vectorised variant.
 """
 
 import argparse

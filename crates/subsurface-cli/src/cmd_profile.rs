@@ -514,7 +514,7 @@ mod tests {
     }
 
     /// `profile` reports exact transport beside diffusion: skin1's albedo as random walks of
-    /// the same medium give it (0.439 / 0.213 / 0.116, docs/fidelity.md), and through 10 mm
+    /// the same medium give it (0.439 / 0.213 / 0.116, docs/lab/fidelity.md), and through 10 mm
     /// about twice diffusion's green; nothing for the Gaussian preset, which is no medium.
     #[test]
     fn profile_reports_exact_transport_for_a_medium() {

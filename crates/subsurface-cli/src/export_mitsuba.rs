@@ -1,6 +1,6 @@
 //! `subsurface export-mitsuba`: the same scene as a Mitsuba 3 scene, to path-trace a reference.
 //!
-//! What is exported, and how our conventions map onto Mitsuba's (docs/fidelity.md):
+//! What is exported, and how our conventions map onto Mitsuba's (docs/lab/fidelity.md):
 //!
 //! - Camera: `perspective` with `fov_axis="y"` and a `lookat` transform; near/far are not needed.
 //! - Lights: our lighting pass writes diffuse radiance = albedo x irradiance (no 1/pi), while a
@@ -193,7 +193,7 @@ pub fn scene_xml(
     writeln!(x, "<?xml version=\"1.0\" encoding=\"utf-8\"?>")?;
     writeln!(
         x,
-        "<!-- Written by `subsurface export-mitsuba`; conventions in docs/fidelity.md.\n     \
+        "<!-- Written by `subsurface export-mitsuba`; conventions in docs/lab/fidelity.md.\n     \
          Emitters are pi times our intensities: our diffuse radiance is albedo x irradiance. -->"
     )?;
     writeln!(x, "<scene version=\"3.0.0\">")?;

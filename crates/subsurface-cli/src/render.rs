@@ -12,7 +12,7 @@ use crate::settings_args::{SettingsArgs, load_scene, replicate};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Scene file (TOML, see README). Without it, the embedded default scene: a backlit hand
+    /// Scene file (TOML, see docs/guide.md). Without it, the embedded default scene: a backlit hand
     /// beside a wedge.
     pub scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model (in metres, skin material); the

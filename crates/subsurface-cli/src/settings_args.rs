@@ -72,7 +72,7 @@ pub struct SettingsArgs {
     /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
     /// irradiance blurred in texture space, same T(s) as paper), diffusion = light diffusing
     /// through the material's measured medium (T(s) of a slab by exact transport, lit by the
-    /// entry surface, plus unscattered and once-scattered light; docs/fidelity.md), off = none
+    /// entry surface, plus unscattered and once-scattered light; docs/lab/fidelity.md), off = none
     /// [default: render.transmittance.method, diffusion].
     #[arg(long, value_name = "METHOD")]
     pub transmittance: Option<TransmittanceMethod>,

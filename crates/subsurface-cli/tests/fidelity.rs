@@ -1,5 +1,5 @@
 //! Ground truth: the Mitsuba export and the regression guard against the committed path-traced
-//! references (docs/fidelity.md).
+//! references (docs/lab/fidelity.md).
 //!
 //! - The export test path-traces a 32x32, 16 spp image; it is skipped only when Python cannot
 //!   import mitsuba (CI installs it, and sets SUBSURFACE_REQUIRE_MITSUBA=1 to fail instead).
@@ -389,7 +389,7 @@ fn regression_guard_against_committed_references() {
 /// within the target on every region, as recorded. The bounce (passes::bounce) adds to ours a
 /// share of the full reference's light within 2 points of its record on every region, and on
 /// the hand's fingers, where the references differ most (the full one holds about 1.3x the
-/// light), a real part of that difference and not more than all of it (docs/fidelity.md,
+/// light), a real part of that difference and not more than all of it (docs/lab/fidelity.md,
 /// findings 9 and 11).
 #[test]
 fn the_bounce_is_the_light_between_parts() {

@@ -165,7 +165,7 @@ pub fn separable_kernel_for(
 /// [`separable_kernel_for`] with each Gaussian's 1-D projection, `G1(v, x) = sqrt(2 pi v)
 /// G(v, x)`, in place of the radial profile sampled along a line: the kernel a separable
 /// pass needs for the right response to a straight edge (the knife-edge measurement,
-/// docs/fidelity.md). Blurring along x then y with it, every edge's profile across it is
+/// docs/lab/fidelity.md). Blurring along x then y with it, every edge's profile across it is
 /// exactly the 2-D profile's, because the pass along the edge integrates to 1. The radial
 /// sampling of SeparableSSS.h (`separable_kernel_for`) weighs each term by `1 / sqrt(v)` on
 /// top, which for skin's tabulated kernel is part of the paper's look but for a measured

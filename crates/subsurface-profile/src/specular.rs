@@ -116,7 +116,7 @@ pub fn rough_transmittance(cos_theta: f64, alpha: f64, eta: f64) -> f64 {
 /// [`rough_transmittance`] on 0..=1 (least squares on 65 cosines). It is what
 /// the GPU evaluates instead of reading a LUT row: on lavapipe those reads were 14 of the
 /// `diffusion` lighting pass's 117 ms at 640x360 (its taps, single scattering and exit each
-/// read it; docs/performance.md). Within 0.003 of the integral for roughness 0.15 to 1 and
+/// read it; docs/lab/performance.md). Within 0.003 of the integral for roughness 0.15 to 1 and
 /// eta 1.1 to 1.6, 0.007 at roughness 0.05 and 0.02 at 0.01, where a smooth boundary's curve
 /// falls within a degree of grazing (the LUT row it replaced held 0.006 there); within 0.001
 /// head-on (see the tests).

@@ -234,7 +234,7 @@ fn default_scene_with(ctx: &GpuContext, samples: u32, jitter: bool, widen: f32) 
     // The paper's own skin kernel, which its few-sample mode was made for. The default
     // scene's measured skin1 spreads 17 taps over 13 mm of red tail: there 7 taps of either
     // kind stand far apart (7 fixed FLIP 0.011, 7 jittered 0.013 and relative RMSE 0.16 on
-    // skin against 33), which docs/performance.md reports.
+    // skin against 33), which docs/lab/performance.md reports.
     s.edit_materials(|m| {
         m.medium = subsurface_profile::Medium::default();
         m.albedo = subsurface_render::scene::SKIN_ALBEDO;

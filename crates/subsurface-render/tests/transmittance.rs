@@ -504,7 +504,7 @@ fn tilted_slab_transmits(yaw_deg: f32, thickness_mm: f32) {
         2048,
     );
     // The chord's term alone: the lateral taps see the tilted plane `thickness_mm` away across
-    // the slab and give more (docs/fidelity.md, finding 6).
+    // the slab and give more (docs/lab/fidelity.md, finding 6).
     s.desc.render.transmittance.lateral_taps = 0;
     let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:

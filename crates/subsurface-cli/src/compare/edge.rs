@@ -1,4 +1,4 @@
-//! The knife-edge measurement (docs/fidelity.md): the image averaged along a straight shadow
+//! The knife-edge measurement (docs/lab/fidelity.md): the image averaged along a straight shadow
 //! edge, per channel, and its 10-90 % rise distance in millimetres of skin. Averaging along
 //! the edge, where nothing changes, leaves a curve smooth enough to judge a blur's width
 //! against a noisy path-traced reference, which pixel errors and region means cannot.

@@ -1,6 +1,6 @@
 //! `subsurface compare`: a real-time render against a path-traced reference of the same scene.
 //!
-//! Errors reported (docs/fidelity.md):
+//! Errors reported (docs/lab/fidelity.md):
 //! - RMSE of linear radiance (diffuse + specular, before exposure and tone mapping) over the
 //!   whole image, and relative to the reference's mean radiance;
 //! - relative error of region means (luminance) over the skin pixels and the named regions of
@@ -31,7 +31,7 @@ pub struct CompareArgs {
     /// Side-by-side image: real-time | reference | FLIP error.
     #[arg(long, short, default_value = "compare.png", value_name = "FILE.png")]
     pub out: PathBuf,
-    /// Named regions (JSON, see docs/fidelity.md) [default: SCENE.regions.json beside the
+    /// Named regions (JSON, see docs/lab/fidelity.md) [default: SCENE.regions.json beside the
     /// scene, if present].
     #[arg(long, value_name = "FILE.json")]
     pub regions: Option<PathBuf>,

@@ -1,4 +1,4 @@
-//! Transmittance against thickness (docs/fidelity.md): the pixels of a backlit scene binned
+//! Transmittance against thickness (docs/lab/fidelity.md): the pixels of a backlit scene binned
 //! by the thickness the light crosses to reach them, real-time and reference averaged per bin
 //! and channel. Binning along lines of constant thickness (the wedge's columns) averages the
 //! path tracer's noise away where a pixel comparison would drown in it, and the thickness

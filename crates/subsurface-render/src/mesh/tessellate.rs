@@ -5,7 +5,7 @@
 //! smooth, but its silhouette, its shadow map and a path tracer see the flat facets. Light
 //! crossing a backlit finger of eight facets passes through the thin wedge where two facets
 //! meet, and the faceted finger's outline then shines several times brighter and whiter
-//! than a round one's (docs/fidelity.md, finding 7). Tessellating the mesh once, on the CPU
+//! than a round one's (docs/lab/fidelity.md, finding 7). Tessellating the mesh once, on the CPU
 //! when the scene loads, gives the rasteriser, the shadow maps and the exported reference
 //! the surface the normals already promise.
 

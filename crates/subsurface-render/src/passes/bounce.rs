@@ -1,7 +1,7 @@
 //! The light one lit part of the skin sends another across the air: a finger's lit side toward
 //! its neighbour, a cheek toward the nose. A renderer without global illumination leaves it
 //! out; against the path tracer it is most of what the backlit hand's fingers miss
-//! (docs/fidelity.md, findings 9 and 11).
+//! (docs/lab/fidelity.md, findings 9 and 11).
 //!
 //! Every shadow-map texel is a lit point whose position (its distance along the texel's ray)
 //! and normal (the map's second channel) are known, and so is the flux the light delivers to

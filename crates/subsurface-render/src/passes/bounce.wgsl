@@ -4,7 +4,7 @@
 // into cells so that a few hundred reads cover the whole map). Every cell sends on what the
 // light delivered to it: diffusely (the medium's albedo, through the flux-weighted normal sum)
 // and by its rough boundary's reflection. The cells are not tested for visibility: a shadow
-// map cannot tell whether two lit points see each other (docs/fidelity.md, finding 11).
+// map cannot tell whether two lit points see each other (docs/lab/fidelity.md, finding 11).
 
 // Per cell: rgb = sum of flux x position, a = the flux (per unit of the light's colour: spot
 // falloff x the texel's solid angle, or its area across a directional beam).
@@ -151,7 +151,7 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
     let tolerance = LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 0.1) * object.world_per_mm;
     // Inside a surface the four texels around the pixel all lie on it: their bilinear blend
     // serves, and the other twelve loads are left to the pixels that need them (on an H200 the
-    // sixteen were a fifth of the lighting pass at 1920x1080; docs/performance.md).
+    // sixteen were a fifth of the lighting pass at 1920x1080; docs/lab/performance.md).
     let f = pos - floor(pos);
     var inner = vec3<f32>(0.0);
     var inside = true;

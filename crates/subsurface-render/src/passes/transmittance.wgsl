@@ -105,10 +105,10 @@ fn profile_transmittance(s_mm: f32) -> vec3<f32> {
 // this stays near 0.73 for roughness 0.3, because facets tilted toward a grazing direction see
 // it less obliquely. Where the camera grazes a backlit rim that is most of the light leaving:
 // with the smooth 1 - F the finger proxy's light-side outline read -25 % against the path
-// tracer, with this -14 % (docs/fidelity.md, finding 8).
+// tracer, with this -14 % (docs/lab/fidelity.md, finding 8).
 // A polynomial fit of the integral rather than a LUT row (within 0.003 of it for roughness
 // 0.15 to 1): `diffusion` evaluates it up to a dozen times per light and pixel, and the reads
-// were 14 of its lighting pass's 117 ms on lavapipe at 640x360 (docs/performance.md).
+// were 14 of its lighting pass's 117 ms on lavapipe at 640x360 (docs/lab/performance.md).
 fn boundary_transmittance(mu: f32) -> f32 {
     let x = clamp(mu, 0.0, 1.0);
     let lo = object.boundary_fit[0];
@@ -172,11 +172,11 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     }
     // The lighting pipeline that reads the lateral map runs this only at outline pixels, with
     // one texel: the N x N loop's code cost 0.14 ms of registers at every pixel of that pass on
-    // an H100 (docs/performance.md). Written as min(N, 1), not a literal 1: with the literal,
+    // an H100 (docs/lab/performance.md). Written as min(N, 1), not a literal 1: with the literal,
     // Mesa 22.3's lavapipe chose to inline this pipeline's uniforms and compiled a new copy of
     // it at every bind without freeing the last (11 MB and 55 ms a frame at 320x240; the
     // viewer's soak test grew 18 % in ten cycles), while a bound that still reads a uniform
-    // keeps the shader it compiled once (docs/performance.md, "lavapipe's inlined uniforms").
+    // keeps the shader it compiled once (docs/lab/performance.md, "lavapipe's inlined uniforms").
     let taps = i32(lights.thickness_filter);
     let texels = shadow_distance(light, sc, select(taps, min(taps, 1), LATERAL_SOURCE == 1u));
     let d_in = texels.x;
@@ -231,7 +231,7 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
 // lobe of sigma = alpha (eta - 1) per axis. A collimated irradiance E then leaves radiance
 // pi E T p(theta) in this renderer's units (pi, because our Lambertian radiance is albedo x E).
 // It is what makes the thin end of a backlit wedge 2-6x brighter in the path tracer than any
-// diffusion model (docs/fidelity.md): a prism of skin bends the light toward the camera.
+// diffusion model (docs/lab/fidelity.md): a prism of skin bends the light toward the camera.
 fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
     let inside = refract(-l, n_back, 1.0 / eta);
@@ -284,7 +284,7 @@ const SCATTER_STEPS: i32 = 8;
 // shader holds costs registers at every pixel of that pipeline on an H100, taken or not
 // (1920x1080, the default scene: its lighting pass 2.80 ms with eight steps, 2.71 with four,
 // `paper`'s 2.55), for 0.8 point on the finger's outline against the path tracer
-// (docs/performance.md); the thickness there is a single texel (light_entry).
+// (docs/lab/performance.md); the thickness there is a single texel (light_entry).
 const OUTLINE_SCATTER_STEPS: i32 = 4;
 // An override, so that each pipeline's march has a constant trip count.
 override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == 1u);

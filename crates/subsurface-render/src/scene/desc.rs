@@ -1,4 +1,4 @@
-//! The scene description as written in a scene file (TOML, `docs/scene-format.md`).
+//! The scene description as written in a scene file (TOML, `docs/guide.md`).
 
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};

@@ -1,4 +1,4 @@
-//! Scene description (TOML, see `docs/scene-format.md`) and scene loading.
+//! Scene description (TOML, see `docs/guide.md`) and scene loading.
 //!
 //! [`SceneDesc`] is the raw, serialisable description (`desc`, checked by `validate`);
 //! [`Scene`] is the loaded scene with meshes and textures decoded, ready for upload.

@@ -1,4 +1,4 @@
-//! Parsing a scene file and checking every value (ranges in `docs/scene-format.md`).
+//! Parsing a scene file and checking every value (ranges in `docs/guide.md`).
 
 use glam::Vec3;
 
@@ -111,7 +111,7 @@ impl SceneDesc {
         toml::to_string(self).expect("a SceneDesc always serialises to TOML")
     }
 
-    /// Checks every number (see `docs/scene-format.md` for the ranges).
+    /// Checks every number (see `docs/guide.md` for the ranges).
     pub fn validate(&self, name_for_errors: &str) -> Result<(), SceneError> {
         let c = Check {
             file: name_for_errors,

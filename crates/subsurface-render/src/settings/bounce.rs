@@ -1,6 +1,6 @@
 //! Settings of the light that one lit part of the skin sends another across the air (a
 //! finger's lit side toward its neighbour), gathered from a flux pyramid of the shadow maps
-//! (`passes::bounce`; docs/fidelity.md, finding 11).
+//! (`passes::bounce`; docs/lab/fidelity.md, finding 11).
 
 use serde::{Deserialize, Serialize};
 

@@ -70,7 +70,7 @@ pub enum SssFetch {
     /// lacks STORAGE_BINDING that pass is a fragment pass. Other methods, and adapters without
     /// compute shaders and storage textures, fetch packed. The default: on an H200 the two
     /// passes took 0.68 ms at 1920x1080 against packed's 2.78 (lavapipe, a CPU, runs them
-    /// within 10 % of each other; docs/performance.md).
+    /// within 10 % of each other; docs/lab/performance.md).
     #[default]
     Workgroup,
 }

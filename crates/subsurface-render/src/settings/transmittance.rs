@@ -21,7 +21,7 @@ pub enum TransmittanceMethod {
     /// the surface nearest the light, whose irradiance, blurred in texture space, is
     /// attenuated by the same T(s) as `Paper`.
     Tsm,
-    /// Light diffusing through the medium (our extension, see `docs/fidelity.md`): T(s) is the
+    /// Light diffusing through the medium (our extension, see `docs/lab/fidelity.md`): T(s) is the
     /// multiply scattered light that a slab of the material's measured coefficients transmits,
     /// by exact transport (adding-doubling; diffusion theory's multipole passes half the green
     /// and a tenth of the blue through a finger), relative to what it reflects, leaving in the
@@ -29,7 +29,7 @@ pub enum TransmittanceMethod {
     /// (along the view ray) and the light that crosses thin parts unscattered. It decays
     /// exponentially rather than like a Gaussian, so fingers and thick ears still glow red.
     /// The Gaussian skin preset uses skin1's coefficients. The default: against the path
-    /// tracer it is the closest on every backlit canonical scene (docs/fidelity.md), where
+    /// tracer it is the closest on every backlit canonical scene (docs/lab/fidelity.md), where
     /// `Paper`'s Gaussian T(s) has all but vanished at the thickness of a finger.
     #[default]
     Diffusion,
@@ -79,7 +79,7 @@ pub enum LateralPass {
     /// one compute dispatch per object then evaluates every light's transmitted light there.
     /// The default: on the data-centre GPUs measured so far a fragment shader's arithmetic
     /// ran many times slower than a compute shader's, and the evaluation is nearly all
-    /// arithmetic (docs/performance.md). Adapters without compute shaders and storage
+    /// arithmetic (docs/lab/performance.md). Adapters without compute shaders and storage
     /// textures evaluate in the fragment shader.
     #[default]
     Compute,

@@ -1,7 +1,7 @@
 //! The render-settings sections: Subsurface scattering, Transmittance, Image and Compare
 //! (the split screen's second side).
 
-use egui::{DragValue, RichText, Slider, Ui};
+use egui::{DragValue, Slider, Ui};
 use subsurface_render::{LateralPass, SssFetch, SssMethod, TransmittanceMethod};
 
 use super::widgets::{combo, labelled, odd_slider, settings_section, view_combo};
@@ -125,10 +125,6 @@ pub fn image(ui: &mut Ui, m: &mut Model) {
         changed |= labelled(ui, "debug view", |ui| {
             view_combo(ui, "a view", &mut m.state.a.view)
         });
-        ui.label(
-            RichText::new("Thickness and irradiance-map views are not in the renderer yet.")
-                .small(),
-        );
         changed
     });
 }

@@ -7,7 +7,7 @@
 // reads one interpolated value per pixel instead of running each light's thickness, LUT reads,
 // taps and single-scattering march (transmittance.wgsl, `transmitted_from_map`). With the
 // lateral taps alone in the map, `diffusion` cost +65 % of `paper`'s lighting pass on an H100
-// at 1920x1080; with everything, +19 % (docs/performance.md).
+// at 1920x1080; with everything, +19 % (docs/lab/performance.md).
 //
 // Two ways to fill the map, the same numbers (`LateralPass` in the settings):
 // - `fs_transmitted` evaluates each texel in the raster pass's fragment shader;
@@ -15,7 +15,7 @@
 //   `cs_transmitted`, dispatched once per object with that object's group 1 over the object's
 //   box on screen, evaluates the texels it finds its index on, each over several invocations
 //   (and `cs_bounce` the bounce, where the map has its layer). On an H200 this took the default
-//   scene's map in a third of the fragment shader's time (docs/performance.md).
+//   scene's map in a third of the fragment shader's time (docs/lab/performance.md).
 // Part of lighting.rs's module: it calls lighting.wgsl's and transmittance.wgsl's functions.
 
 struct LateralPair {

@@ -83,7 +83,7 @@ fn beckmann_smith_g1(cos_theta: f32, m: f32) -> f32 {
 // subsurface_profile::specular). Kelemen/Szirmay-Kalos (d'Eon and Luebke 2007) stands in
 // |L + V|^2 / 4 for G's N.L N.V: the same at the highlight, but where a back light grazes a
 // rim toward the camera |L + V| goes to 0, and it gave 44x the path tracer's reflection on the
-// finger-backlit scene's outline (docs/fidelity.md), where G bounds it.
+// finger-backlit scene's outline (docs/lab/fidelity.md), where G bounds it.
 fn boundary_specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32) -> f32 {
     let ndotl = dot(n, l);
     let ndotv = dot(n, v);
@@ -212,7 +212,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     // the diffuse part becomes the larger of their sum and the nearest texel's: the grazing
     // view and the thin rim make an outline's transmitted light change within a texel, and the
     // nearest texel alone, lying further in, left the finger's light-side outline at -27 %
-    // against the path tracer instead of -17 % (docs/fidelity.md, finding 14).
+    // against the path tracer instead of -17 % (docs/lab/fidelity.md, finding 14).
     let from_map = TRANSMITTANCE_METHOD == 5u && LATERAL_SOURCE == 1u;
     var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
     if (from_map) {
