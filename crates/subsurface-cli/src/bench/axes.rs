@@ -11,6 +11,8 @@ use subsurface_render::RenderSettings;
 pub struct Axis {
     pub(super) key: String,
     pub(super) values: Vec<String>,
+    /// The flag that stands for it (`--lateral-taps`), for errors; `None` for `--vary`.
+    pub(super) flag: Option<&'static str>,
 }
 
 /// `KEY=V1,V2,..`: the values split at commas outside brackets and quotes, so that an array
@@ -36,15 +38,20 @@ pub(super) fn parse_axis(s: &str) -> Result<Axis, String> {
     if out.iter().any(String::is_empty) {
         return Err(format!("an empty value in {s:?}"));
     }
-    Ok(Axis { key, values: out })
+    Ok(Axis {
+        key,
+        values: out,
+        flag: None,
+    })
 }
 
 /// An axis for `key` from a flag's list (`--sss none,separable`); none for an empty list (the
 /// scene's own value).
-pub(super) fn flag_axis<T: ToString>(key: &str, values: &[T]) -> Option<Axis> {
+pub(super) fn flag_axis<T: ToString>(flag: &'static str, key: &str, values: &[T]) -> Option<Axis> {
     (!values.is_empty()).then(|| Axis {
         key: key.to_string(),
         values: values.iter().map(ToString::to_string).collect(),
+        flag: Some(flag),
     })
 }
 
@@ -68,9 +75,10 @@ pub(super) fn combinations(base: &RenderSettings, axes: &[Axis]) -> Result<Vec<C
         for c in &out {
             for v in &axis.values {
                 let mut settings = c.settings.clone();
-                settings
-                    .set(&axis.key, v)
-                    .map_err(|e| anyhow::anyhow!("--vary {e}"))?;
+                settings.set(&axis.key, v).map_err(|e| match axis.flag {
+                    Some(flag) => anyhow::anyhow!("{flag}: {}", e.message),
+                    None => anyhow::anyhow!("--vary {e}"),
+                })?;
                 let mut values = c.values.clone();
                 values.push((axis.key.clone(), v.clone()));
                 next.push(Combination { settings, values });

@@ -390,13 +390,29 @@ fn base_settings(scene: &RenderSettings, args: &BenchArgs) -> Result<RenderSetti
 /// `--vary`'s.
 fn axes_of(args: &BenchArgs) -> Vec<Axis> {
     [
-        flag_axis("sss.method", &args.sss),
-        flag_axis("sss.fetch", &args.fetch),
-        flag_axis("transmittance.method", &args.transmittance),
-        flag_axis("transmittance.lateral_taps", &args.lateral_taps),
-        flag_axis("transmittance.lateral_texel_mm", &args.lateral_texel_mm),
-        flag_axis("transmittance.lateral_pass", &args.lateral_pass),
-        flag_axis("bounce.ring", &args.bounce_ring),
+        flag_axis("--sss", "sss.method", &args.sss),
+        flag_axis("--fetch", "sss.fetch", &args.fetch),
+        flag_axis(
+            "--transmittance",
+            "transmittance.method",
+            &args.transmittance,
+        ),
+        flag_axis(
+            "--lateral-taps",
+            "transmittance.lateral_taps",
+            &args.lateral_taps,
+        ),
+        flag_axis(
+            "--lateral-texel-mm",
+            "transmittance.lateral_texel_mm",
+            &args.lateral_texel_mm,
+        ),
+        flag_axis(
+            "--lateral-pass",
+            "transmittance.lateral_pass",
+            &args.lateral_pass,
+        ),
+        flag_axis("--bounce-ring", "bounce.ring", &args.bounce_ring),
     ]
     .into_iter()
     .flatten()
