@@ -8,10 +8,17 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use glam::{Mat4, Vec3};
+use subsurface_render::settings::Quality;
 use subsurface_render::{LateralPass, Scene, SssFetch, SssMethod, TransmittanceMethod};
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct SettingsArgs {
+    /// Quality preset, a bundle of the settings below: low (the 2010 paper's cost class),
+    /// medium (the default) or high (every term); keys the scene file sets and the flags
+    /// below override it. `subsurface settings --quality Q` lists what it sets
+    /// [default: the scene's render.quality, medium].
+    #[arg(long, value_name = "PRESET")]
+    pub quality: Option<Quality>,
     /// Image width in pixels [default: the scene's render.width, 1280].
     #[arg(long)]
     pub width: Option<u32>,
@@ -122,6 +129,23 @@ pub struct SettingsArgs {
     pub set: Vec<(String, String)>,
 }
 
+/// Sets one `[render]` key of `scene`; the quality preset keeps the scene file's own keys
+/// over its bundle.
+pub fn set_key(
+    scene: &mut Scene,
+    key: &str,
+    value: &str,
+) -> Result<(), subsurface_render::settings::InvalidSetting> {
+    if key.strip_prefix("render.").unwrap_or(key) == "quality" {
+        let q: Quality = value
+            .trim_matches('"')
+            .parse()
+            .map_err(|m| subsurface_render::settings::InvalidSetting::new("render.quality", m))?;
+        return scene.desc.set_quality(q);
+    }
+    scene.desc.render.set(key, value)
+}
+
 /// Parses `KEY=VALUE` (the value may hold further `=`).
 pub fn parse_key_value(s: &str) -> Result<(String, String), String> {
     let (k, v) = s
@@ -151,6 +175,12 @@ impl SettingsArgs {
     /// Writes the flags into the scene's settings and materials and checks the result; an
     /// error names the flag.
     pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some(q) = self.quality {
+            scene
+                .desc
+                .set_quality(q)
+                .map_err(|e| anyhow::anyhow!("--quality: {e}"))?;
+        }
         let r = &mut scene.desc.render;
         macro_rules! set {
             ($flag:expr, $field:expr) => {
@@ -185,8 +215,7 @@ impl SettingsArgs {
             anyhow::bail!("{}: {}", flag_of(&e.field), e.message);
         }
         for (key, value) in &self.set {
-            r.set(key, value)
-                .map_err(|e| anyhow::anyhow!("--set {e}"))?;
+            set_key(scene, key, value).map_err(|e| anyhow::anyhow!("--set {e}"))?;
         }
         if let Some(w) = self.sss_width {
             anyhow::ensure!(
@@ -258,11 +287,17 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
 pub struct SettingsListArgs {
     /// Scene file whose values to show (default: the embedded default scene).
     pub scene: Option<PathBuf>,
+    /// Show the values with this quality preset (the scene file's own keys kept).
+    #[arg(long, value_name = "PRESET")]
+    pub quality: Option<Quality>,
 }
 
 /// `subsurface settings`: one line per key of `[render]`.
 pub fn list(args: &SettingsListArgs) -> Result<()> {
-    let scene = load_scene(args.scene.as_ref(), None)?;
+    let mut scene = load_scene(args.scene.as_ref(), None)?;
+    if let Some(q) = args.quality {
+        scene.desc.set_quality(q)?;
+    }
     let values = scene.desc.render.entries();
     let mut out = String::new();
     for d in subsurface_render::SETTINGS {

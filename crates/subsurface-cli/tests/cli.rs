@@ -308,3 +308,52 @@ fn bench_reports_flip_and_memory_bound() {
     );
     assert!(traffic.iter().any(|t| t["name"] == "copy"));
 }
+
+/// A scene's path through `shared/assets/` is looked up in `SUBSURFACE_ASSETS` where that is
+/// set: the head's scene, copied where its relative paths lead nowhere, renders with the
+/// variable and fails naming the missing file without it.
+#[test]
+fn asset_paths_follow_subsurface_assets() {
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets");
+    let assets = std::env::var_os("SUBSURFACE_ASSETS").map_or(assets, std::path::PathBuf::from);
+    if !assets.join("LeePerrySmith/LeePerrySmith.glb").is_file() {
+        eprintln!("skipping: no head model");
+        return;
+    }
+    let dir = tempdir("assets");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/head.toml");
+    std::fs::copy(scene, dir.join("head.toml")).unwrap();
+    let run = |with: bool| {
+        let mut c = std::process::Command::new(common::bin());
+        c.args([
+            "render",
+            "head.toml",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+            "h.png",
+        ])
+        .current_dir(&dir);
+        if with {
+            c.env("SUBSURFACE_ASSETS", &assets);
+        } else {
+            c.env_remove("SUBSURFACE_ASSETS");
+        }
+        c.output().unwrap()
+    };
+    let without = run(false);
+    assert!(!without.status.success());
+    assert!(stderr_line(&without).contains("LeePerrySmith"));
+    if !common::gpu_available(&dir) {
+        return;
+    }
+    let with = run(true);
+    assert!(
+        with.status.success(),
+        "{}",
+        String::from_utf8_lossy(&with.stderr)
+    );
+    assert!(dir.join("h.png").is_file());
+}

@@ -4,9 +4,9 @@
 //! - The export test path-traces a 32x32, 16 spp image; it is skipped only when Python cannot
 //!   import mitsuba (CI installs it, and sets SUBSURFACE_REQUIRE_MITSUBA=1 to fail instead).
 //! - The regression guard renders each canonical scene with the default method (`separable` +
-//!   `diffusion`) and checks that its errors stay within the recorded ones (references/fidelity.json)
-//!   plus a margin, the knife edge's width too,
-//!   and below those of `--sss none --transmittance off`.
+//!   `diffusion`) at `--quality high` and checks that its errors stay within the recorded ones
+//!   (references/fidelity.json) plus a margin, the knife edge's width too, and below those of
+//!   `--sss none --transmittance off`; the other presets within their own targets.
 
 mod common;
 
@@ -232,10 +232,17 @@ fn compare_json_with(
     args: &[&str],
     out: &Path,
 ) -> serde_json::Value {
+    // The records are `high`'s, every term of the renderer; the presets are checked apart.
+    let quality: &[&str] = if args.contains(&"--quality") {
+        &[]
+    } else {
+        &["--quality", "high"]
+    };
     let o = bin()
         .arg("compare")
         .arg(reference)
         .arg(scene)
+        .args(quality)
         .args(args)
         .args(["--json", "--out"])
         .arg(out)
@@ -379,6 +386,68 @@ fn regression_guard_against_committed_references() {
         checked += 1;
     }
     assert!(checked >= 4, "only {checked} references checked");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// Issue 38's targets for the cheaper presets: every region of every canonical scene within
+/// ±25 % of the path tracer at `medium` (the default) and ±40 % at `low`, and each better than
+/// no scattering and no transmittance, on FLIP or on every region.
+#[test]
+fn presets_meet_their_region_targets() {
+    if !gpu_available() {
+        return;
+    }
+    let out = tempdir("presets");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(root().join("scenes/canonical")).unwrap() {
+        let scene = entry.unwrap().path();
+        if scene.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let name = scene.file_stem().unwrap().to_string_lossy().to_string();
+        let reference = root().join(format!("references/{name}.exr"));
+        if !reference.is_file() || (name.starts_with("head") && !head_available()) {
+            continue;
+        }
+        let base = compare_json(&reference, &scene, "none", "off", &out.join("b.png"));
+        let regions = |v: &serde_json::Value| -> Vec<(String, f64)> {
+            v["regions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|g| (g["name"].as_str().unwrap().to_string(), f(g, "rel_error")))
+                .collect()
+        };
+        let bare = regions(&base);
+        for (preset, target) in [("medium", 0.25), ("low", 0.40)] {
+            let v = compare_json_with(
+                &reference,
+                &scene,
+                &["--quality", preset],
+                &out.join("p.png"),
+            );
+            let got = regions(&v);
+            for (region, e) in &got {
+                assert!(
+                    e.abs() <= target,
+                    "{name} at {preset}: region {region} {e:+.3} outside ±{target}"
+                );
+            }
+            let flip_better = f(&v, "flip_mean") <= f(&base, "flip_mean") + 5e-4;
+            let regions_better = got
+                .iter()
+                .zip(&bare)
+                .all(|((_, e), (_, b))| e.abs() <= b.abs() + 1e-3);
+            assert!(
+                flip_better || regions_better,
+                "{name} at {preset}: not better than none+off on FLIP ({} vs {}) or on every region ({got:?} vs {bare:?})",
+                f(&v, "flip_mean"),
+                f(&base, "flip_mean")
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 4, "only {checked} scenes checked");
     std::fs::remove_dir_all(&out).ok();
 }
 

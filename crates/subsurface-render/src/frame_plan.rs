@@ -18,6 +18,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::gpu_scene::{camera_uniform, world_per_mm};
+use crate::passes::overrides::Terms;
 use crate::scene::{LightKind, Scene};
 use crate::settings::{LateralPass, RenderSettings, SssMethod, TransmittanceMethod};
 use crate::uniforms::LightsUniform;
@@ -81,6 +82,8 @@ pub struct LightingVariant {
     /// per pixel only where the map has no texel of the pixel's surface), 2 the taps per pixel
     /// (no map; with a map, the variant [`FramePlan::taps_objects`] are drawn with).
     pub lateral: u32,
+    /// The optional terms it evaluates.
+    pub terms: Terms,
 }
 
 /// One frame's structure. Made by [`FramePlan::new`]; compared with the last frame's to
@@ -167,6 +170,7 @@ impl FramePlan {
                 (true, true) => 1,
                 (true, false) => 2,
             },
+            terms: Terms::of(settings),
         };
         Self {
             width,
@@ -379,7 +383,7 @@ mod tests {
     #[test]
     fn lateral_map_reduction_follows_the_skin_on_screen() {
         let scene = Scene::default_scene();
-        let s = scene.desc.render.clone();
+        let s = high(&scene);
         let (r256, r512) = (
             downsample(&scene, &s, 256, 256),
             downsample(&scene, &s, 512, 512),
@@ -401,7 +405,7 @@ mod tests {
     #[test]
     fn skin_too_far_for_the_map_gathers_its_own_taps() {
         let scene = Scene::default_scene();
-        let s = scene.desc.render.clone();
+        let s = high(&scene);
         let n = downsample(&scene, &s, 1280, 720);
         let flags = lateral_taps_objects(&scene, &s, 1280, 720, n);
         assert_eq!(flags.len(), scene.objects.len());
@@ -441,7 +445,7 @@ mod tests {
     #[test]
     fn no_lateral_map_where_nothing_reads_it() {
         let scene = Scene::default_scene();
-        let mut s = scene.desc.render.clone();
+        let mut s = high(&scene);
         let mut paper = s.clone();
         paper.transmittance.method = TransmittanceMethod::Paper;
         // The bounce alone is gathered on the map.
@@ -461,6 +465,13 @@ mod tests {
         assert_eq!(downsample(&away, &s, 512, 512), 1);
     }
 
+    /// `scene`'s settings at `Quality::High`: the lateral map and the bounce both run.
+    fn high(scene: &Scene) -> RenderSettings {
+        let mut desc = scene.desc.clone();
+        desc.set_quality(crate::settings::Quality::High).unwrap();
+        desc.render
+    }
+
     fn plan(scene: &Scene, settings: &RenderSettings) -> FramePlan {
         FramePlan::new(scene, settings, AdapterFeatures::ALL)
     }
@@ -470,7 +481,7 @@ mod tests {
     #[test]
     fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
         let scene = Scene::default_scene();
-        let mut s = scene.desc.render.clone();
+        let mut s = high(&scene);
         assert!(plan(&scene, &s).lateral_downsample > 1);
         assert_eq!(plan(&scene, &s).lighting.lateral, 1);
         s.transmittance.lateral_texel_mm = 0.0;
@@ -488,7 +499,7 @@ mod tests {
     #[test]
     fn the_transmitted_light_takes_two_layers_before_the_bounce() {
         let scene = Scene::default_scene();
-        let mut s = scene.desc.render.clone();
+        let mut s = high(&scene);
         s.bounce = crate::settings::BounceSettings::OFF;
         let p = plan(&scene, &s);
         assert!(p.transmitted_map);
@@ -503,7 +514,7 @@ mod tests {
         let p = plan(&unshadowed, &s);
         assert!(!p.transmitted_map, "no light has a shadow map");
         assert_eq!(p.lateral, LateralShape::NONE);
-        let with_bounce = scene.desc.render.clone();
+        let with_bounce = high(&scene);
         assert!(with_bounce.bounce.enabled());
         let p = plan(&scene, &with_bounce);
         assert_eq!(p.bounce_layer, Some(TRANSMITTED_LAYERS));

@@ -55,7 +55,7 @@ mod shader_tests {
     }
 
     /// The lighting pass builds `fs_main` once per transmittance method by setting the WGSL
-    /// override `TRANSMITTANCE_METHOD` (passes/lighting.rs): each value, and the default that
+    /// override `TRANSMITTANCE_METHOD` (frame_plan.rs, `LightingVariant`): each value, and the default that
     /// follows the uniform, must survive override processing and SPIR-V output, as wgpu does
     /// it when the pipeline is created (an error there would only show on a GPU).
     #[test]
@@ -76,7 +76,7 @@ mod shader_tests {
         .validate(&module)
         .unwrap();
         let codes = crate::TransmittanceMethod::ALL.map(|m| m.code());
-        // Every method with every source of `diffusion` (lighting.rs, `lateral_source`).
+        // Every method with every source of `diffusion` (frame_plan.rs, `LightingVariant::lateral`).
         let variants = codes
             .into_iter()
             .chain([255])
@@ -85,6 +85,9 @@ mod shader_tests {
             let mut constants = naga::back::PipelineConstants::default();
             constants.insert("TRANSMITTANCE_METHOD".into(), f64::from(code));
             constants.insert("LATERAL_SOURCE".into(), f64::from(source));
+            // Each term alone and none: every `has_term` branch compiles either way.
+            let terms = [7, 0, 1, 2, 4][usize::from(code as u8) % 5];
+            constants.insert("DIFFUSION_TERMS".into(), f64::from(terms));
             // The lateral map's compute evaluation (lateral.wgsl) is specialized alike.
             let entries = [
                 (naga::ShaderStage::Fragment, "fs_main"),

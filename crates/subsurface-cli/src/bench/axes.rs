@@ -64,8 +64,13 @@ pub(super) struct Combination {
 
 /// Every combination of `axes` over `base`, the last axis varying fastest; a combination is
 /// left out where an axis's key does not matter to its settings and takes other than its first
-/// value. An axis value the settings refuse is an error naming `--vary` and the key.
-pub(super) fn combinations(base: &RenderSettings, axes: &[Axis]) -> Result<Vec<Combination>> {
+/// value. An axis value the settings refuse is an error naming `--vary` and the key. A quality
+/// preset sets its bundle and then `keep` again (the scene's own keys, `--set`'s).
+pub(super) fn combinations(
+    base: &RenderSettings,
+    axes: &[Axis],
+    keep: &[(String, String)],
+) -> Result<Vec<Combination>> {
     let mut out = vec![Combination {
         settings: base.clone(),
         values: Vec::new(),
@@ -75,10 +80,16 @@ pub(super) fn combinations(base: &RenderSettings, axes: &[Axis]) -> Result<Vec<C
         for c in &out {
             for v in &axis.values {
                 let mut settings = c.settings.clone();
-                settings.set(&axis.key, v).map_err(|e| match axis.flag {
+                let error = |e: subsurface_render::settings::InvalidSetting| match axis.flag {
                     Some(flag) => anyhow::anyhow!("{flag}: {}", e.message),
                     None => anyhow::anyhow!("--vary {e}"),
-                })?;
+                };
+                settings.set(&axis.key, v).map_err(error)?;
+                if axis.key.strip_prefix("render.").unwrap_or(&axis.key) == "quality" {
+                    for (k, v) in keep {
+                        settings.set(k, v).map_err(error)?;
+                    }
+                }
                 let mut values = c.values.clone();
                 values.push((axis.key.clone(), v.clone()));
                 next.push(Combination { settings, values });
@@ -115,7 +126,7 @@ mod tests {
             parse_axis("transmittance.method=paper,diffusion").unwrap(),
             parse_axis("transmittance.lateral_taps=0,12").unwrap(),
         ];
-        let c = combinations(&RenderSettings::default(), &axes).unwrap();
+        let c = combinations(&RenderSettings::default(), &axes, &[]).unwrap();
         let got: Vec<_> = c
             .iter()
             .map(|c| (c.values[0].1.as_str(), c.values[1].1.as_str()))
@@ -127,6 +138,7 @@ mod tests {
         let e = combinations(
             &RenderSettings::default(),
             &[parse_axis("sss.samples=4").unwrap()],
+            &[],
         )
         .unwrap_err()
         .to_string();

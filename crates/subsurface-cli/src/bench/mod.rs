@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use subsurface_profile::Medium;
+use subsurface_render::settings::Quality;
 use subsurface_render::{
     BounceSettings, GpuContext, LateralPass, PassTiming, RenderOptions, RenderSettings, Renderer,
     Scene, SssFetch, SssMethod, TransmittanceMethod,
@@ -42,6 +43,10 @@ pub struct BenchArgs {
     /// same screen area at every count), comma-separated.
     #[arg(long, default_value = "1", value_delimiter = ',')]
     pub characters: Vec<u32>,
+    /// Quality presets to measure, comma-separated (low, medium, high): each its bundle of
+    /// settings with the scene's own keys and --set over it [default: the scene's].
+    #[arg(long, value_delimiter = ',', value_name = "PRESET,..")]
+    pub quality: Vec<Quality>,
     /// SSS methods to measure, comma-separated (none, gaussian6, separable, hable13,
     /// texture); short for --vary render.sss.method=.. [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "METHOD,..")]
@@ -225,7 +230,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     let base = load_scene(args.scene.as_ref(), args.model.as_ref())?;
     let settings = base_settings(&base.desc.render, args)?;
-    let configurations = combinations(&settings, &axes_of(args))?;
+    let keep: Vec<(String, String)> = base
+        .desc
+        .render_keys
+        .0
+        .iter()
+        .chain(&args.set)
+        .cloned()
+        .collect();
+    let configurations = combinations(&settings, &axes_of(args), &keep)?;
     let all_lights = base.desc.lights.len() as u32;
     let light_counts = if args.lights.is_empty() {
         vec![all_lights]
@@ -390,6 +403,7 @@ fn base_settings(scene: &RenderSettings, args: &BenchArgs) -> Result<RenderSetti
 /// `--vary`'s.
 fn axes_of(args: &BenchArgs) -> Vec<Axis> {
     [
+        flag_axis("--quality", "quality", &args.quality),
         flag_axis("--sss", "sss.method", &args.sss),
         flag_axis("--fetch", "sss.fetch", &args.fetch),
         flag_axis(

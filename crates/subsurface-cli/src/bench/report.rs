@@ -21,6 +21,8 @@ pub(super) struct Run {
     pub(super) lights: u32,
     pub(super) width: u32,
     pub(super) height: u32,
+    /// The quality preset the settings started from.
+    pub(super) quality: &'static str,
     pub(super) sss: &'static str,
     /// How the screen-space passes fetched their texels (`packed`, `workgroup`, `direct`).
     pub(super) fetch: &'static str,
@@ -91,6 +93,7 @@ impl Run {
         };
         // The varied keys the columns do not already show.
         let shown = [
+            "quality",
             "sss.method",
             "sss.fetch",
             "transmittance.method",
@@ -99,10 +102,16 @@ impl Run {
             "transmittance.lateral_pass",
             "bounce.ring",
         ];
-        self.varied
+        let label = self
+            .varied
             .iter()
             .filter(|(k, _)| !shown.contains(&k.as_str()))
-            .fold(label, |l, (k, v)| format!("{l} {k}={v}"))
+            .fold(label, |l, (k, v)| format!("{l} {k}={v}"));
+        if self.varied.contains_key("quality") {
+            format!("{} {label}", self.quality)
+        } else {
+            label
+        }
     }
 }
 
@@ -191,6 +200,7 @@ pub(super) fn summarise(samples: Vec<Vec<PassTiming>>, characters: u32, s: &Rend
         lights: 0,
         width: s.width,
         height: s.height,
+        quality: s.quality.name(),
         sss: s.sss.method.name(),
         fetch: s.sss.fetch.name(),
         transmittance: s.transmittance.method.name().to_string(),

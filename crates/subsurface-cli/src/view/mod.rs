@@ -1,10 +1,12 @@
 //! `subsurface view`: the interactive viewer. A winit window shows the renderer's image at
-//! the window's physical size with an egui panel over its left side; every setting is live
-//! (`Renderer::update`, no restart), cameras orbit or fly, lights move, and a split screen
-//! compares two settings.
+//! the window's physical size with an egui panel over its left side (the window opens wider
+//! than the scene by the panel's width, so the panel covers none of the scene at first);
+//! every setting is live (`Renderer::update`, no restart), cameras orbit or fly, lights move,
+//! and a split screen compares two settings.
 //!
 //! Layout: `camera` (orbit/fly math, unit-tested), `state` (all settings <-> scene file and
-//! `RenderOptions`, round-trip tested), `model` (edits, no GPU), `panel` (egui), `gfx` (what
+//! `RenderOptions`, round-trip tested), `model` (edits, no GPU), `setting` (one `[render]`
+//! key as the panel edits it, checked by the render crate), `panel` (egui), `gfx` (what
 //! lives on the device: surface, egui and scene renderers), `app` (window and frame loop).
 
 mod app;
@@ -13,6 +15,7 @@ mod fonts;
 mod gfx;
 mod model;
 mod panel;
+mod setting;
 mod soak;
 mod state;
 
@@ -39,7 +42,8 @@ pub struct ViewArgs {
     #[arg(long, value_enum)]
     pub view: Option<ViewArg>,
     /// The scene's settings, overridden as `subsurface render` does; --width/--height give the
-    /// window's inner size in physical pixels (default: the scene's size in logical pixels).
+    /// window's inner size in physical pixels (default: the scene's size in logical pixels,
+    /// widened by the panel's width so that the panel covers none of the scene at first).
     #[command(flatten)]
     pub settings: SettingsArgs,
     /// Start in split screen: the settings above on the left, this SSS method on the right.
@@ -129,9 +133,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         soak: args.soak.then(|| soak::Soak::new(frames)),
     });
     let size: winit::dpi::Size = match (args.settings.width, args.settings.height) {
-        (None, None) => {
-            winit::dpi::LogicalSize::new(state.desc.render.width, state.desc.render.height).into()
-        }
+        // The scene's size beside the panel: the panel covers none of the scene at first.
+        (None, None) => winit::dpi::LogicalSize::new(
+            f64::from(state.desc.render.width) + f64::from(panel::PANEL_WIDTH),
+            f64::from(state.desc.render.height),
+        )
+        .into(),
         (w, h) => winit::dpi::PhysicalSize::new(
             w.unwrap_or(state.desc.render.width),
             h.unwrap_or(state.desc.render.height),

@@ -9,7 +9,8 @@ use subsurface_render::scene::{CameraDesc, LightDesc, LightKind, MaterialDesc};
 use subsurface_render::{PassTiming, Scene};
 
 use super::camera::{Basis, Controller, ORBIT_RADIANS_PER_HEIGHT};
-use super::state::ViewerState;
+use super::setting::{Rejected, Value};
+use super::state::{ViewerState, Which};
 
 /// What the renderers must do before the next frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -36,6 +37,8 @@ pub struct UiFields {
     pub open_path: String,
     pub save_path: String,
     pub screenshot_path: String,
+    /// Setting edits `RenderSettings::set` refused, shown with their errors.
+    pub rejected: Vec<super::setting::Rejected>,
 }
 
 /// Frame statistics shown in the panel.
@@ -79,6 +82,7 @@ impl Model {
                 open_path: String::new(),
                 save_path,
                 screenshot_path: "screenshot.png".into(),
+                rejected: Vec::new(),
             },
             state,
             scene,
@@ -361,6 +365,46 @@ pub fn typed_path(s: &str) -> PathBuf {
     match (s.strip_prefix("~/"), std::env::var_os("HOME")) {
         (Some(rest), Some(home)) => PathBuf::from(home).join(rest),
         _ => PathBuf::from(s),
+    }
+}
+
+/// Edits of the generated settings (view/setting.rs).
+impl Model {
+    /// Sets `key` of side `which` to `value` with the scene file's checks; a refused value
+    /// is kept, with its one-line error, until the next edit of the key. Whether it applied.
+    pub fn set_setting(&mut self, which: Which, key: &'static str, value: Value) -> bool {
+        self.forget_rejected(which, key);
+        match self.state.set(which, key, &value.text()) {
+            Ok(()) => {
+                self.dirty.update = true;
+                true
+            }
+            Err(e) => {
+                let error = e.to_string().replace('\n', " ");
+                self.ui.rejected.push(Rejected {
+                    which,
+                    key,
+                    value,
+                    error,
+                });
+                false
+            }
+        }
+    }
+
+    /// The refused edit of `key` on side `which`, if its error is showing.
+    pub fn rejected(&self, which: Which, key: &str) -> Option<&Rejected> {
+        self.ui
+            .rejected
+            .iter()
+            .find(|r| r.which == which && r.key == key)
+    }
+
+    /// Drops a refused edit: the value shown is the setting's again.
+    pub fn forget_rejected(&mut self, which: Which, key: &str) {
+        self.ui
+            .rejected
+            .retain(|r| !(r.which == which && r.key == key));
     }
 }
 

@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
+use subsurface_render::settings::InvalidSetting;
 use subsurface_render::{
-    DebugView, RenderOptions, RenderSettings, Scene, SssMethod, SssSettings, TransmittanceMethod,
-    TransmittanceSettings,
+    DebugView, RenderOptions, RenderSettings, Scene, SssMethod, SssSettings, TransmittanceSettings,
 };
 
 /// Settings of one side of the comparison (the whole view when not comparing): clones of the
@@ -35,6 +35,20 @@ impl Side {
     }
 }
 
+/// A side of the split screen: `A` the main settings (the whole view, or left of the
+/// divider), `B` the comparison (right of it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Which {
+    A,
+    B,
+}
+
+/// Whether `key` (below `[render]`) is one side's own (a [`Side`] holds it) rather than the
+/// scene's, which both sides share.
+pub fn per_side(key: &str) -> bool {
+    key.starts_with("sss.") || key.starts_with("transmittance.")
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewerState {
     pub desc: SceneDesc,
@@ -47,21 +61,6 @@ pub struct ViewerState {
     pub b: Side,
     /// Divider position as a fraction of the view width.
     pub split: f32,
-}
-
-/// The SSS methods `subsurface render` offers, in its order.
-pub fn sss_methods() -> Vec<SssMethod> {
-    SssMethod::ALL.to_vec()
-}
-
-/// The transmittance methods `subsurface render` offers, in its order.
-pub fn transmittance_methods() -> Vec<TransmittanceMethod> {
-    TransmittanceMethod::ALL.to_vec()
-}
-
-/// The flag value of a transmittance method (e.g. "seed-report").
-pub fn transmittance_name(t: TransmittanceMethod) -> String {
-    t.name().to_string()
 }
 
 impl ViewerState {
@@ -158,14 +157,51 @@ impl ViewerState {
         d
     }
 
+    pub fn side(&self, which: Which) -> &Side {
+        match which {
+            Which::A => &self.a,
+            Which::B => &self.b,
+        }
+    }
+
+    /// The settings one side renders with (unchecked): its own over the scene's.
+    pub fn settings(&self, which: Which) -> RenderSettings {
+        Self::compose(&self.desc.render, self.side(which))
+    }
+
+    fn compose(scene: &RenderSettings, side: &Side) -> RenderSettings {
+        RenderSettings {
+            sss: side.sss.clone(),
+            transmittance: side.transmittance.clone(),
+            ..scene.clone()
+        }
+    }
+
+    /// Sets `key` (TOML text, as `--set KEY=VALUE` takes it) for side `which`, with the scene
+    /// file's checks: a side's own keys ([`per_side`]) change that side, the others the scene
+    /// and so both sides. A refused value changes nothing.
+    pub fn set(&mut self, which: Which, key: &str, value: &str) -> Result<(), InvalidSetting> {
+        let mut s = self.settings(which);
+        s.set(key, value)?;
+        let side = match which {
+            Which::A => &mut self.a,
+            Which::B => &mut self.b,
+        };
+        side.sss = s.sss.clone();
+        side.transmittance = s.transmittance.clone();
+        let scene = &mut self.desc.render;
+        *scene = RenderSettings {
+            sss: scene.sss.clone(),
+            transmittance: scene.transmittance.clone(),
+            ..s
+        };
+        Ok(())
+    }
+
     /// Render options for one side, at the scene's size (the viewer keeps that at the
     /// window's size).
     pub fn options(&self, side: &Side) -> Result<RenderOptions> {
-        let settings = RenderSettings {
-            sss: side.sss.clone(),
-            transmittance: side.transmittance.clone(),
-            ..self.desc.render.clone()
-        };
+        let settings = Self::compose(&self.desc.render, side);
         settings
             .validate()
             .map_err(|e| anyhow::anyhow!("render.{e}"))?;
@@ -223,6 +259,7 @@ fn same_path(a: &Path, b: &Path) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use subsurface_render::TransmittanceMethod;
     use subsurface_render::scene::{DEFAULT_SCENE_TOML, LightDesc, LightKind};
 
     fn edited() -> ViewerState {
@@ -243,6 +280,7 @@ mod tests {
                 lateral_taps: 7,
                 lateral_texel_mm: 3.5,
                 lateral_pass: subsurface_render::LateralPass::Fragment,
+                ..Default::default()
             },
             view: DebugView::Final,
         };

@@ -8,9 +8,9 @@
 //! it: the reflective shadow map of Dachsbacher and Stamminger 2005, with the flux derived
 //! rather than stored. [`FluxPyramid`] sums the texels into cells ([`base_texels`], then 2 x 2
 //! cells a level: flux, flux-weighted position and normal sums), a compute pass after the
-//! shadow maps. `bounce.wgsl` ([`GATHER`], part of the lighting shader) reads each level from
+//! shadow maps. `bounce.wgsl` (part of the lighting shader, `lighting::SHADER`) reads each level from
 //! `ring` to `2 ring` of its cells away from the shaded point, a few hundred reads in all, on
-//! the lateral map's reduced grid (`lighting::LateralTargets`, layer `bounce_layer`) where
+//! the lateral map's reduced grid (`lateral_map::LateralTargets`, layer `bounce_layer`) where
 //! there is one, per pixel elsewhere. The shaded point takes the bounce as irradiance, which
 //! joins the direct light before the subsurface blur.
 //!
@@ -33,8 +33,6 @@ pub const SHADER: &str = concat!(
     include_str!("common.wgsl"),
     include_str!("bounce_build.wgsl")
 );
-/// The gather, appended to the lighting shader (`lighting::SHADER`).
-pub const GATHER: &str = include_str!("bounce.wgsl");
 /// Shadow-map texels per side of the pyramid's finest cell for an atlas of `atlas_size`: 4, or
 /// 8 (read every other one) from 1024 up (bounce_build.wgsl, `base`).
 pub fn base_texels(atlas_size: u32) -> u32 {

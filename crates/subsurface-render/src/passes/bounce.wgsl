@@ -1,4 +1,4 @@
-// The light one lit part of the skin sends another across the air (lighting.rs puts this file
+// The light one lit part of the skin sends another across the air (lighting/mod.rs puts this file
 // after transmittance.wgsl): gathered from the flux pyramid of each light's shadow map that
 // bounce_build.wgsl sums (a reflective shadow map, Dachsbacher and Stamminger 2005, summed
 // into cells so that a few hundred reads cover the whole map). Every cell sends on what the

@@ -1,4 +1,4 @@
-// Shadow lookups of the lighting pass (lighting.rs puts this file after lighting.wgsl):
+// Shadow lookups of the lighting pass (lighting/mod.rs puts this file after lighting.wgsl):
 // which shadow-map layer and texel a point projects to, percentage-closer filtering through
 // comparison gathers, and the shadow of the diffusion source that oblique light feeds.
 
@@ -108,6 +108,15 @@ fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     return lit / 9.0;
 }
 
+// The optional terms this pipeline evaluates, a bit each (overrides.rs, `Terms`): 1
+// `diffusion`'s unscattered lobe, 2 its single scattering, 4 the diffusion source's shadow
+// along the refracted ray (source_shadow). Pipelines without a term compile without its code.
+override DIFFUSION_TERMS: u32 = 7u;
+
+fn has_term(bit: u32) -> bool {
+    return (DIFFUSION_TERMS & bit) != 0u;
+}
+
 // The light's visibility for the diffusion seen at p, per channel. Light entering at an angle
 // refracts, and the diffusion source it feeds lies 1 / sigma_t' along the refracted ray
 // (Jensen et al. 2001's real source), so the source under p was lit where the refracted ray
@@ -117,7 +126,7 @@ fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
 fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, shadow: f32) -> vec3<f32> {
     let cos_i = dot(n_vertex, l);
     let scatters = lights.scattering != 0u && object.sss_strength > 0.0;
-    if (!scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
+    if (!has_term(4u) || !scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
         return vec3<f32>(shadow);
     }
     let sin_t = sqrt(max(1.0 - cos_i * cos_i, 0.0)) / object.eta;

@@ -3,13 +3,13 @@
 
 // The transmittance method this pipeline is built for (`TransmittanceMethod::code`), or 255
 // to follow `lights.transmittance` at run time (the texture-space irradiance pass). The
-// lighting pass builds one pipeline per method (lighting.rs, `LightingPass::specialize`) so
+// lighting pass builds one pipeline per method (frame_plan.rs, `LightingVariant`) so
 // that the compiler drops the other methods' code: one shader for all of them made `paper`'s
 // lighting pass pay for `diffusion`'s taps and LUT reads it never ran (lavapipe, 640x360:
 // 117 ms against 77 specialized; on GPUs the unused branches still cost registers).
 override TRANSMITTANCE_METHOD: u32 = 255u;
 
-// Where this pipeline's `diffusion` comes from (lighting.rs, `lateral_source`): 0 per point
+// Where this pipeline's `diffusion` comes from (frame_plan.rs, `LightingVariant::lateral`): 0 per point
 // without lateral light (another method, or no taps), 1 the lateral map (shade reads every
 // light's transmitted light there at once, and runs the chords here, without taps, where the
 // map has no texel of the pixel's surface), 2 per point with the taps (no map, skin too far for the map's texels:
@@ -606,13 +606,16 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                     diffuse = max(diffuse, shape * lateral);
                 }
                 out.diffuse = diffuse * unlit;
-                let ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
+                var ballistic = vec3<f32>(0.0);
+                if (has_term(1u)) {
+                    ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
+                }
                 // Single scattering only where the surface faces away from the light: where it
                 // faces the light, its shadow test's penumbra and the map's texels would print
                 // onto the unblurred specular target (and a lit point's own single scattering
                 // is a reflection term this renderer does not model).
                 var single = vec3<f32>(0.0);
-                if (facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
+                if (has_term(2u) && facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
                     single = single_scattering(light, p, n_vertex, l, v, s_mm);
                 }
                 out.ballistic = (ballistic + single) * unlit;

@@ -460,7 +460,7 @@ impl Renderer {
         self.bounce.as_ref()
     }
 
-    /// The shadow atlas (R32Float array of linear light distances).
+    /// The shadow atlas (`Rg32Float` array: linear light distance and the entry normal).
     pub fn shadow_atlas(&self) -> &wgpu::Texture {
         &self.shadow.atlas
     }

@@ -51,6 +51,10 @@ pub struct SceneDesc {
     pub camera: CameraDesc,
     #[serde(default)]
     pub render: RenderSettings,
+    /// The `[render]` keys the file set itself (key below `[render]`, value as TOML), which
+    /// override its quality preset's: kept so that another preset (`--quality`) keeps them.
+    #[serde(skip)]
+    pub render_keys: RenderKeys,
     #[serde(default)]
     pub lights: Vec<LightDesc>,
     #[serde(default)]
@@ -500,3 +504,28 @@ impl MaterialDesc {
 
 /// A plausible linear albedo for untextured (Caucasian) skin.
 pub const SKIN_ALBEDO: [f32; 3] = [0.75, 0.5, 0.4];
+
+/// A scene file's own `[render]` keys ([`SceneDesc::render_keys`]). Not part of what a scene
+/// is: two descriptions with the same settings are equal whichever keys their files spelled.
+#[derive(Clone, Debug, Default)]
+pub struct RenderKeys(pub Vec<(String, String)>);
+
+impl PartialEq for RenderKeys {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl SceneDesc {
+    /// Sets the quality preset, the file's own `[render]` keys kept over it.
+    pub fn set_quality(
+        &mut self,
+        quality: crate::settings::Quality,
+    ) -> Result<(), crate::settings::InvalidSetting> {
+        self.render.apply_quality(quality);
+        for (key, value) in &self.render_keys.0 {
+            self.render.set(key, value)?;
+        }
+        Ok(())
+    }
+}

@@ -93,6 +93,20 @@ pub fn load_image(path: &Path) -> Result<image::RgbaImage, SceneError> {
     Ok(img.to_rgba8())
 }
 
+/// Where a scene's file path points: relative to the scene's folder, except that a path through
+/// a `shared/assets/` folder (the head, which is not in the repository) is looked up in
+/// `SUBSURFACE_ASSETS` when that is set, so that one variable moves every scene's assets.
+pub fn asset_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
+    const SHARED: &str = "shared/assets/";
+    if let (Some(at), Some(assets)) = (path.find(SHARED), std::env::var_os("SUBSURFACE_ASSETS"))
+        && !Path::new(path).is_absolute()
+        && !assets.is_empty()
+    {
+        return Path::new(&assets).join(&path[at + SHARED.len()..]);
+    }
+    base_dir.join(path)
+}
+
 fn load_object(
     o: &ObjectDesc,
     index: usize,
@@ -113,7 +127,7 @@ fn load_object(
             let model = if path == BUILTIN_HAND {
                 mesh::load_gltf_slice(mesh::BUILTIN_HAND_GLB, "builtin:hand (right.glb)")
             } else {
-                mesh::load_gltf(&base_dir.join(path))
+                mesh::load_gltf(&asset_path(base_dir, path))
             }
             .map_err(|e| ctx("mesh.gltf", e))?;
             if m.use_gltf_color {
@@ -163,7 +177,7 @@ fn load_object(
     };
     let tex = |field: &str, p: &Option<String>| -> Result<Option<image::RgbaImage>, SceneError> {
         p.as_ref()
-            .map(|p| load_image(&base_dir.join(p)).map_err(|e| ctx(field, e)))
+            .map(|p| load_image(&asset_path(base_dir, p)).map_err(|e| ctx(field, e)))
             .transpose()
     };
     if let Some(t) = tex("material.albedo_texture", &m.albedo_texture)? {

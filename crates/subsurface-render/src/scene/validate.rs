@@ -102,8 +102,44 @@ impl SceneDesc {
                 },
             }
         })?;
+        let mut desc = desc;
+        desc.apply_render_keys(s, name_for_errors)?;
         desc.validate(name_for_errors)?;
         Ok(desc)
+    }
+
+    /// The `[render]` table as the file wrote it: its quality preset first, then its own keys
+    /// over it (serde filled the keys the file left out with the default preset's).
+    fn apply_render_keys(&mut self, s: &str, name_for_errors: &str) -> Result<(), SceneError> {
+        let table: toml::Table = toml::from_str(s).unwrap_or_default();
+        let Some(toml::Value::Table(render)) = table.get("render") else {
+            return Ok(());
+        };
+        fn leaves(prefix: &str, t: &toml::Table, out: &mut Vec<(String, String)>) {
+            for (k, v) in t {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                match v {
+                    toml::Value::Table(t) => leaves(&key, t, out),
+                    v if key != "quality" => {
+                        out.push((key, crate::settings::value_text(v)));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        let mut keys = Vec::new();
+        leaves("", render, &mut keys);
+        self.render_keys = super::desc::RenderKeys(keys);
+        let quality = self.render.quality;
+        self.set_quality(quality).map_err(|e| SceneError::Invalid {
+            file: name_for_errors.to_string(),
+            field: format!("render.{}", e.field.trim_start_matches("render.")),
+            msg: e.message,
+        })
     }
 
     /// Serialises to TOML; `from_toml_str` of the result gives back `self`.

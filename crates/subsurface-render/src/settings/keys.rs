@@ -19,111 +19,36 @@ const fn doc(key: &'static str, unit: &'static str, doc: &'static str) -> Settin
 }
 
 /// Every key of the `[render]` table, in the scene file's order.
+#[rustfmt::skip]
 pub const SETTINGS: &[SettingDoc] = &[
+    doc("quality", "", "low, medium or high: a bundle of the keys below; explicit keys override it"),
     doc("width", "px", "image width, 1..=16384"),
     doc("height", "px", "image height, 1..=16384"),
-    doc(
-        "exposure_ev",
-        "stops",
-        "radiance is scaled by 2^ev before tone mapping",
-    ),
-    doc(
-        "ambient",
-        "linear RGB",
-        "uniform, unshadowed ambient radiance",
-    ),
+    doc("exposure_ev", "stops", "radiance is scaled by 2^ev before tone mapping"),
+    doc("ambient", "linear RGB", "uniform, unshadowed ambient radiance"),
     doc("background", "linear RGB", "colour where nothing is drawn"),
-    doc(
-        "sss.method",
-        "",
-        "none, gaussian6, separable, hable13 or texture",
-    ),
+    doc("sss.method", "", "none, gaussian6, separable, hable13 or texture"),
     doc("sss.samples", "taps", "separable: kernel taps, odd, 3..=63"),
-    doc(
-        "sss.jitter",
-        "",
-        "separable: jitter the taps per pixel (few-sample mode)",
-    ),
-    doc(
-        "sss.fetch",
-        "",
-        "screen space: packed, workgroup or direct (same image)",
-    ),
-    doc(
-        "sss.follow_surface",
-        "",
-        "screen space: taps fade across depth edges",
-    ),
-    doc(
-        "sss.edge_mm",
-        "mm",
-        "screen space: depth step that stops a tap, > 0",
-    ),
-    doc(
-        "sss.min_sigma_px",
-        "px",
-        "gaussian6: narrower Gaussians are skipped, >= 0",
-    ),
-    doc(
-        "sss.gaussians",
-        "",
-        "gaussian6: which of the five blurred Gaussians add up",
-    ),
-    doc(
-        "sss.texture_size",
-        "texels",
-        "texture space: UV map side, 16..=16384",
-    ),
-    doc(
-        "sss.texture_padding",
-        "texels",
-        "texture space: UV island padding, 0..=16",
-    ),
-    doc(
-        "sss.texture_albedo_pre",
-        "",
-        "texture space: albedo share before the blur, 0..=1",
-    ),
-    doc(
-        "transmittance.method",
-        "",
-        "off, paper, beer, seed-report, tsm or diffusion",
-    ),
-    doc(
-        "transmittance.normal_shrink",
-        "scene units",
-        "inward shift before the shadow lookup",
-    ),
-    doc(
-        "transmittance.thickness_filter",
-        "texels",
-        "odd width averaged for thickness, 1..=15",
-    ),
-    doc(
-        "transmittance.lateral_taps",
-        "taps",
-        "diffusion: lit-surface taps around the chord, 0..=32",
-    ),
-    doc(
-        "transmittance.lateral_texel_mm",
-        "mm",
-        "diffusion: lateral map texel on the skin, 0..=50 (0: per pixel)",
-    ),
-    doc(
-        "transmittance.lateral_pass",
-        "",
-        "diffusion: compute or fragment evaluation of the map",
-    ),
-    doc(
-        "bounce.ring",
-        "cells",
-        "light between parts: cells read per level, 0..=8 (0: off)",
-    ),
-    doc(
-        "bounce.cell_mm",
-        "mm",
-        "light between parts: finest cell width, 0.1..=50",
-    ),
+    doc("sss.jitter", "", "separable: jitter the taps per pixel (few-sample mode)"),
+    doc("sss.fetch", "", "screen space: packed, workgroup or direct (same image)"),
+    doc("sss.follow_surface", "", "screen space: taps fade across depth edges"),
+    doc("sss.edge_mm", "mm", "screen space: depth step that stops a tap, > 0"),
+    doc("sss.min_sigma_px", "px", "gaussian6: narrower Gaussians are skipped, >= 0"),
+    doc("sss.gaussians", "", "gaussian6: which of the five blurred Gaussians add up"),
+    doc("sss.texture_size", "texels", "texture space: UV map side, 16..=16384"),
+    doc("sss.texture_padding", "texels", "texture space: UV island padding, 0..=16"),
+    doc("sss.texture_albedo_pre", "", "texture space: albedo share before the blur, 0..=1"),
+    doc("sss.source_shift", "", "oblique light's shadow looked up where it feeds the diffusion"),
+    doc("transmittance.method", "", "off, paper, beer, seed-report, tsm or diffusion"),
+    doc("transmittance.normal_shrink", "scene units", "inward shift before the shadow lookup"),
+    doc("transmittance.thickness_filter", "texels", "odd width averaged for thickness, 1..=15"),
+    doc("transmittance.lateral_taps", "taps", "diffusion: lit-surface taps around the chord, 0..=32"),
+    doc("transmittance.lateral_texel_mm", "mm", "diffusion: lateral map texel on the skin, 0..=50 (0: per pixel)"),
+    doc("transmittance.lateral_pass", "", "diffusion: compute or fragment evaluation of the map"),
+    doc("transmittance.ballistic", "", "diffusion: unscattered light through thin parts"),
+    doc("transmittance.single_scattering", "", "diffusion: light scattered once through thin parts"),
+    doc("bounce.ring", "cells", "light between parts: cells read per level, 0..=8 (0: off)"),
+    doc("bounce.cell_mm", "mm", "light between parts: finest cell width, 0.1..=50"),
 ];
 
 /// `key` below `[render]` (a leading `render.` is dropped).
@@ -163,7 +88,15 @@ pub fn value_text(v: &toml::Value) -> String {
     match v {
         toml::Value::Float(x) => {
             let f = *x as f32;
-            if f.fract() == 0.0 && f.abs() < 1e15 {
+            // Spelled so that TOML reads a float back: an exponent where plain digits would
+            // be long (or read as an integer), `nan` and `inf` as TOML writes them.
+            if f.is_nan() {
+                "nan".to_string()
+            } else if f.is_infinite() {
+                if f > 0.0 { "inf" } else { "-inf" }.to_string()
+            } else if f != 0.0 && !(1e-4..1e15).contains(&f.abs()) {
+                format!("{f:e}")
+            } else if f.fract() == 0.0 {
                 format!("{f:.1}")
             } else {
                 format!("{f}")
@@ -208,6 +141,18 @@ impl RenderSettings {
     /// being a string) and checks the whole; the error names the key and, for an unknown one,
     /// the keys of its table.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), InvalidSetting> {
+        let mut next = self.clone();
+        next.set_unchecked(key, value)?;
+        next.validate()
+            .map_err(|e| InvalidSetting::new(format!("render.{}", e.field), e.message))?;
+        *self = next;
+        Ok(())
+    }
+
+    /// As [`Self::set`], without checking the other settings' ranges (a scene file's keys are
+    /// put over its preset before the whole is validated, which names the file): the value
+    /// must still be of the key's type.
+    pub fn set_unchecked(&mut self, key: &str, value: &str) -> Result<(), InvalidSetting> {
         let rel = relative(key);
         if !SETTINGS.iter().any(|s| s.key == rel) {
             let table = rel.rsplit_once('.').map_or("", |(t, _)| t);
@@ -238,6 +183,14 @@ impl RenderSettings {
             ));
         }
         let named = |e: InvalidSetting| InvalidSetting::new(format!("render.{rel}"), e.message);
+        if rel == "quality" {
+            let q: super::Quality = value
+                .trim_matches('"')
+                .parse()
+                .map_err(|m| named(InvalidSetting::new("", m)))?;
+            self.apply_quality(q);
+            return Ok(());
+        }
         let parsed = parse_value(value);
         check_range(rel, value, &parsed).map_err(named)?;
         let mut tree = self.to_toml();
@@ -248,13 +201,9 @@ impl RenderSettings {
                 .expect("every key of SETTINGS is a field of the settings");
         }
         *slot = parsed;
-        let settings: RenderSettings = tree
+        *self = tree
             .try_into()
             .map_err(|e: toml::de::Error| named(InvalidSetting::new("", e.message())))?;
-        settings
-            .validate()
-            .map_err(|e| InvalidSetting::new(format!("render.{}", e.field), e.message))?;
-        *self = settings;
         Ok(())
     }
 
@@ -266,9 +215,13 @@ impl RenderSettings {
         match relative(key) {
             "sss.samples" | "sss.jitter" => sss == SssMethod::Separable,
             "sss.fetch" | "sss.follow_surface" | "sss.edge_mm" => sss.is_screen_space(),
+            "sss.source_shift" => sss != SssMethod::None,
             "sss.min_sigma_px" | "sss.gaussians" => sss == SssMethod::Gaussian6,
             k if k.starts_with("sss.texture_") => sss == SssMethod::Texture,
             k if k.starts_with("transmittance.lateral_") => t == TransmittanceMethod::Diffusion,
+            "transmittance.ballistic" | "transmittance.single_scattering" => {
+                t == TransmittanceMethod::Diffusion
+            }
             "transmittance.method" => true,
             k if k.starts_with("transmittance.") => t != TransmittanceMethod::Off,
             "bounce.cell_mm" => self.bounce.enabled(),
@@ -323,7 +276,7 @@ mod tests {
             (
                 "render.colour",
                 "1",
-                "render.colour: unknown key; the keys of render are width, height,",
+                "render.colour: unknown key; the keys of render are quality, width, height,",
             ),
             ("sss.samples", "4", "render.sss.samples: must be odd"),
             ("sss.samples", "abc", "render.sss.samples: "),
@@ -352,6 +305,12 @@ mod tests {
         assert_eq!(text("ambient"), "[0.02, 0.02, 0.02]");
         assert_eq!(text("exposure_ev"), "0.0");
         assert_eq!(text("sss.method"), "\"separable\"");
+        for x in [1e30f32, -3.4e38, 1e-7, 0.0, 2.5, f32::NAN, f32::INFINITY] {
+            let v = toml::Value::Float(f64::from(x));
+            let back = parse_value(&value_text(&v));
+            let y = back.as_float().unwrap_or_else(|| panic!("{x}: {back:?}")) as f32;
+            assert!(y == x || (x.is_nan() && y.is_nan()), "{x} read back as {y}");
+        }
     }
 
     #[test]

@@ -4,11 +4,13 @@
 
 mod bounce;
 mod keys;
+mod quality;
 mod sss;
 mod transmittance;
 
 pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
 pub use keys::{SETTINGS, SettingDoc, value_text};
+pub use quality::Quality;
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{
     DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,
@@ -42,7 +44,13 @@ macro_rules! method_names {
     )*};
 }
 
-method_names!(SssMethod, SssFetch, TransmittanceMethod, LateralPass);
+method_names!(
+    SssMethod,
+    SssFetch,
+    TransmittanceMethod,
+    LateralPass,
+    Quality
+);
 
 /// A setting out of range. `field` is its path below `[render]` as written in a scene file
 /// (`width`, `sss.samples`, `transmittance.normal_shrink`).
@@ -94,8 +102,14 @@ pub const MAX_EXPOSURE_EV: f32 = 32.0;
 
 /// The `[render]` table: output size, exposure, ambient light and the settings of each effect.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+// Missing keys take `high`'s values, not `Default`'s: the default preset is made by `set`, which
+// deserializes (a scene file's keys are put over its preset by `SceneDesc::from_toml_str`).
+#[serde(deny_unknown_fields, default = "RenderSettings::high")]
 pub struct RenderSettings {
+    /// The preset the other keys started from (`Quality::keys`); keys set after it override it.
+    /// A scene file without one takes the default preset.
+    #[serde(default)]
+    pub quality: Quality,
     pub width: u32,
     pub height: u32,
     /// Exposure in stops: radiance is multiplied by 2^ev before tone mapping.
@@ -113,8 +127,17 @@ pub struct RenderSettings {
 }
 
 impl Default for RenderSettings {
+    /// The default preset, [`Quality::Medium`].
     fn default() -> Self {
+        Self::preset(Quality::default())
+    }
+}
+
+impl RenderSettings {
+    /// Every setting at its most accurate: the settings structs' own defaults.
+    pub fn high() -> Self {
         Self {
+            quality: Quality::High,
             width: 1280,
             height: 720,
             exposure_ev: 0.0,
@@ -125,9 +148,37 @@ impl Default for RenderSettings {
             bounce: BounceSettings::default(),
         }
     }
-}
 
-impl RenderSettings {
+    /// `quality`'s preset: [`Self::high`] with its keys set.
+    pub fn preset(quality: Quality) -> Self {
+        let mut s = Self::high();
+        s.apply_quality(quality);
+        s
+    }
+
+    /// Sets `quality` and its bundle: every key any preset sets, at this preset's value or
+    /// else [`Self::high`]'s (the other settings are kept).
+    pub fn apply_quality(&mut self, quality: Quality) {
+        let high = Self::high().entries();
+        let bundle: Vec<&str> = Quality::ALL
+            .iter()
+            .flat_map(|q| q.keys().iter().map(|(k, _)| *k))
+            .collect();
+        for key in bundle {
+            let value = match quality.keys().iter().find(|(k, _)| *k == key) {
+                Some((_, v)) => v.to_string(),
+                None => high
+                    .iter()
+                    .find(|(k, _)| k == key)
+                    .map(|(_, v)| value_text(v))
+                    .expect("a preset's key is a setting"),
+            };
+            self.set_unchecked(key, &value)
+                .expect("a preset's keys are settings of their type");
+        }
+        self.quality = quality;
+    }
+
     /// Checks every value; the error names the field below `[render]`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         for (field, v) in [("width", self.width), ("height", self.height)] {

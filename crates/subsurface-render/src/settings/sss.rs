@@ -122,6 +122,10 @@ pub struct SssSettings {
     /// Texture space: exponent of the albedo applied before the blur, the rest after it:
     /// 0 = post-scatter, 0.5 = pre- and post-scatter (d'Eon), 1 = pre-scatter.
     pub texture_albedo_pre: f32,
+    /// Light entering obliquely feeds a diffusion source along its refracted ray, so the
+    /// shadow it sees is looked up there, per channel (Jensen et al. 2001's real source):
+    /// softer, redder shadow edges.
+    pub source_shift: bool,
 }
 
 impl Default for SssSettings {
@@ -138,6 +142,7 @@ impl Default for SssSettings {
             texture_size: 1024,
             texture_padding: 4,
             texture_albedo_pre: 0.5,
+            source_shift: true,
         }
     }
 }

@@ -129,6 +129,12 @@ pub struct TransmittanceSettings {
     /// `diffusion`: where the lateral map is evaluated, `compute` (a compute shader on the
     /// texels' surfaces) or `fragment` (the map's raster pass); the same map.
     pub lateral_pass: LateralPass,
+    /// `diffusion`: the light that crosses a thin part unscattered, refracted into a narrow
+    /// lobe by the rough boundary (the glow at a backlit edge).
+    pub ballistic: bool,
+    /// `diffusion`: light scattered once on its way through a thin part (Jensen et al.
+    /// 2001's single-scattering term, which diffusion leaves out).
+    pub single_scattering: bool,
 }
 
 /// Default of [`TransmittanceSettings::lateral_texel_mm`].
@@ -139,7 +145,7 @@ pub const MAX_LATERAL_DOWNSAMPLE: u32 = 8;
 /// How much coarser than `lateral_texel_mm` a skin's lateral-map texels may be for its pixels
 /// to read the map: 16 mm at the default 4, about four of skin1's decay lengths. A skin farther
 /// than the nearest, whose texels come out coarser, is drawn with a lighting pipeline that
-/// gathers the taps at every pixel instead (`gpu_scene::lateral_taps_objects`): across a step
+/// gathers the taps at every pixel instead (`frame_plan::lateral_taps_objects`): across a step
 /// in thickness the map's error there grows past the taps' own (tests/transmittance.rs,
 /// `far_skin_gathers_its_own_taps`: at 23 mm texels the row's mean error 0.032 against the
 /// taps' 0.007).
@@ -174,6 +180,8 @@ impl Default for TransmittanceSettings {
             lateral_taps: subsurface_profile::lateral::DEFAULT_LATERAL_TAPS,
             lateral_texel_mm: DEFAULT_LATERAL_TEXEL_MM,
             lateral_pass: LateralPass::default(),
+            ballistic: true,
+            single_scattering: true,
         }
     }
 }

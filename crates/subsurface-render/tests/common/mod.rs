@@ -90,8 +90,33 @@ pub fn white_object_scene(
 /// The scene's own options at `width` x `height`.
 pub fn options(scene: &Scene, width: u32, height: u32) -> RenderOptions {
     let mut o = RenderOptions::from_scene(scene);
+    o.settings = high(scene);
     (o.settings.width, o.settings.height) = (width, height);
     o
+}
+
+/// `scene`'s settings at `Quality::High`: every term of the renderer, each checked here
+/// against its oracle (the cheaper presets are held to the path tracer by subsurface-cli's
+/// tests/fidelity.rs). The scene file's keys and a test's own edits of the settings are kept.
+pub fn high(scene: &Scene) -> subsurface_render::RenderSettings {
+    use subsurface_render::settings::{Quality, value_text};
+    let desc = &scene.desc;
+    let mut as_loaded = desc.clone();
+    as_loaded.set_quality(desc.render.quality).unwrap();
+    let mut high = desc.clone();
+    high.set_quality(Quality::High).unwrap();
+    let mut settings = high.render;
+    for ((key, now), (_, loaded)) in desc
+        .render
+        .entries()
+        .into_iter()
+        .zip(as_loaded.render.entries())
+    {
+        if key != "quality" && now != loaded {
+            settings.set_unchecked(&key, &value_text(&now)).unwrap();
+        }
+    }
+    settings
 }
 
 /// A `w` x `h` texture of `format` holding `bytes` (rows packed tightly), which passes can

@@ -2,9 +2,11 @@
 //!
 //! Layout: this file lays the panel out and holds its Files and GPU timings sections (the two
 //! that ask the app for GPU work, [`Action`]); `scene` (camera, lights), `material`, `settings`
-//! (SSS, transmittance, image, split screen), `view_input` (the 3D view) and `widgets` (what
-//! they share) hold the rest.
+//! (SSS, transmittance, image, split screen), `generated` (the rows made from the render
+//! crate's table of settings, and "All settings"), `view_input` (the 3D view) and `widgets`
+//! (what they share) hold the rest.
 
+mod generated;
 mod material;
 mod scene;
 mod settings;
@@ -16,6 +18,11 @@ use egui::{Color32, RichText, Ui};
 use super::model::{Level, Model, typed_path};
 pub use view_input::Viewport;
 use widgets::{labelled, section};
+
+/// The panel's width at first, in points: the window opens this much wider than the scene's
+/// image (`view::run`), so that the panel covers none of the scene on the first frame.
+/// Labels wrap and widgets stay within it; the user may drag it wider.
+pub const PANEL_WIDTH: f32 = 330.0;
 
 /// What the panel asks of the app that needs the GPU.
 #[derive(Debug)]
@@ -33,7 +40,7 @@ pub fn show(ui: &mut Ui, m: &mut Model, vp: &Viewport) -> Vec<Action> {
     }
     if m.ui.show_panel {
         egui::Panel::left("settings")
-            .default_size(330.0)
+            .default_size(PANEL_WIDTH)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     panel(ui, m, &mut actions);
@@ -66,6 +73,7 @@ fn panel(ui: &mut Ui, m: &mut Model, actions: &mut Vec<Action>) {
     settings::transmittance(ui, m);
     settings::image(ui, m);
     settings::compare(ui, m);
+    generated::all_settings(ui, m);
     timings(ui, m, actions);
     ui.separator();
     for (level, msg) in m.log.iter().rev().take(8) {

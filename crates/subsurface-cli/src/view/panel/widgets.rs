@@ -1,7 +1,6 @@
-//! Small widgets the panel's sections share: collapsing sections, labelled rows, drop-downs
-//! and the odd-count slider.
+//! Small widgets the panel's sections share: collapsing sections, labelled rows, drop-downs.
 
-use egui::{ComboBox, Slider, Ui, WidgetText};
+use egui::{ComboBox, Ui, WidgetText};
 use subsurface_render::DebugView;
 
 use crate::view::model::Model;
@@ -78,19 +77,4 @@ pub fn combo<T: Copy + PartialEq, S: Into<WidgetText>>(
 /// The debug-view drop-down.
 pub fn view_combo(ui: &mut Ui, id: &str, v: &mut DebugView) -> bool {
     combo(ui, id, v, VIEWS.map(|(k, _)| k), view_name)
-}
-
-/// An odd count in `lo..=hi` as a slider over the odd values.
-pub fn odd_slider(ui: &mut Ui, n: &mut u32, lo: u32, hi: u32, text: &str) -> bool {
-    let mut k = n.saturating_sub(1) / 2;
-    let changed = ui
-        .add(
-            Slider::new(&mut k, (lo - 1) / 2..=(hi - 1) / 2)
-                .custom_formatter(|v, _| format!("{}", 2 * v as u32 + 1))
-                .custom_parser(|s| s.parse::<f64>().ok().map(|v| ((v - 1.0) / 2.0).round()))
-                .text(text),
-        )
-        .changed();
-    *n = 2 * k + 1;
-    changed
 }

@@ -16,7 +16,7 @@
 //   box on screen, evaluates the texels it finds its index on, each over several invocations
 //   (and `cs_bounce` the bounce, where the map has its layer). On an H200 this took the default
 //   scene's map in a third of the fragment shader's time (docs/lab/performance.md).
-// Part of lighting.rs's module: it calls lighting.wgsl's and transmittance.wgsl's functions.
+// Part of the lighting shader (lighting/mod.rs, `SHADER`): it calls lighting.wgsl's and transmittance.wgsl's functions.
 
 struct LateralPair {
     @location(0) first: vec4<f32>,
@@ -64,7 +64,7 @@ fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> Lateral
     return LateralPair(vec4<f32>(t.diffuse, depth), vec4<f32>(t.ballistic, depth));
 }
 
-// The surface at each texel, for `cs_transmitted` (lighting.rs, `LateralTargets`): the world
+// The surface at each texel, for `cs_transmitted` (lateral_map/targets.rs, `LateralTargets`): the world
 // position and view depth (0: nothing), and the vertex normal turned toward the camera's side
 // with the object's index in the draw list. 32-bit floats: the evaluation sees the point
 // `fs_transmitted` would, to the bit.
@@ -74,13 +74,13 @@ fn fs_surface(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair
     return LateralPair(vec4<f32>(in.world, depth), vec4<f32>(oriented_normal(in, front), f32(object.index)));
 }
 
-// Group 2 of the compute evaluation (lighting.rs, `lateral_compute_layout`); the lighting
+// Group 2 of the compute evaluation (lateral_map/targets.rs, `lateral_compute_layout`); the lighting
 // pass's group 2 (texture-space maps) uses bindings 0 to 3.
 @group(2) @binding(8) var surface_position: texture_2d<f32>;
 @group(2) @binding(9) var surface_normal: texture_2d<f32>;
 @group(2) @binding(10) var lateral_out: texture_storage_2d_array<rgba32float, write>;
 // The first texel of this dispatch (xy): each object's dispatch covers only its box on screen
-// (lighting.rs, `LightingPass::set_object_rects`), one entry per object at a dynamic offset.
+// (lateral_map/targets.rs, `ObjectRects`), one entry per object at a dynamic offset.
 // Binding 1: the lighting pass's group 3 has the lateral map at 0.
 @group(3) @binding(1) var<uniform> dispatch_origin: vec4<u32>;
 
@@ -94,7 +94,7 @@ struct TexelSurface {
 };
 
 // Texels of other objects and empty ones are left as they are: the pass cleared the map
-// before the dispatches (lighting.rs, `encode_lateral`), and each texel is its object's alone.
+// before the dispatches (lateral_map/mod.rs, `LateralMapPass::encode`), and each texel is its object's alone.
 fn texel_surface(id: vec3<u32>) -> TexelSurface {
     let at = dispatch_origin.xy + id.xy;
     let texel = vec2<i32>(at);

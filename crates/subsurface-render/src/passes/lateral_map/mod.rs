@@ -16,9 +16,8 @@ use targets::{LateralSurface, ObjectRects, dispatch_origin_layout, lateral_compu
 
 use crate::frame_plan::{FramePlan, TRANSMITTED_LAYERS};
 use crate::gpu::object::GpuObject;
-use crate::passes::overrides::{DIFFUSION_WHOLE, LATERAL_SOURCE, TRANSMITTANCE_METHOD};
+use crate::passes::overrides::{Terms, diffusion_whole};
 use crate::passes::util;
-use crate::settings::TransmittanceMethod;
 use crate::timing::TimedPass;
 
 /// One raster pass at the lateral map's resolution: `pipeline` into `targets` (layers of the
@@ -42,15 +41,11 @@ struct Compute<'a> {
     surface: &'a LateralSurface,
 }
 
-/// `cs_transmitted`'s overrides: as [`DIFFUSION_WHOLE`], with the taps' sum gathered over the
-/// texel's invocations before `transmittance` (LATERAL_SOURCE 3).
-const DIFFUSION_SPREAD: [(&str, f64); 2] = [
-    (
-        TRANSMITTANCE_METHOD,
-        TransmittanceMethod::Diffusion.code() as f64,
-    ),
-    (LATERAL_SOURCE, 3.0),
-];
+/// `LATERAL_SOURCE` of the raster passes and `cs_bounce`: `diffusion` whole, the taps
+/// included; and of `cs_transmitted`, whose taps' sum is gathered over the texel's lanes before
+/// `transmittance`.
+const WHOLE: f64 = 2.0;
+const SPREAD: f64 = 3.0;
 
 /// `cs_transmitted`'s and `cs_bounce`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`),
 /// and the block of texels (across, down) a workgroup of 64 takes. Each texel waits out a
@@ -81,6 +76,9 @@ fn spread_constants(base: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
 /// the bounce.
 pub struct LateralMapPass {
     module: wgpu::ShaderModule,
+    raster_layout: wgpu::PipelineLayout,
+    /// The terms every pipeline below is built with (the plan's).
+    terms: Terms,
     /// `fs_transmitted` into the transmitted light's two layers of the lateral map, keeping
     /// the nearest surface in the map's z-buffer (the bounce pass after it shades only that).
     transmitted: wgpu::RenderPipeline,
@@ -114,26 +112,6 @@ impl LateralMapPass {
     ) -> Self {
         let [frame_layout, object_layout, _] = layouts;
         let raster_layout = util::pipeline_layout(device, "lateral", &layouts);
-        // Back faces culled, so no depth pre-pass is needed to run the taps about once a texel
-        // (the lighting pass draws both sides, for open meshes: a pixel whose back face shows
-        // finds no texel of its surface and takes the chord's slab alone; mesh transforms
-        // keep mirrored objects' winding, `Mesh::transform`).
-        // Each texel evaluates `diffusion` whole, the lateral taps included (LATERAL_SOURCE 2).
-        let raster = |fragment, targets, depth| {
-            util::MeshPipeline {
-                label: "lateral",
-                layout: &raster_layout,
-                module,
-                vertex: "vs_main",
-                fragment,
-                targets,
-                cull_mode: Some(wgpu::Face::Back),
-                depth,
-                constants: &DIFFUSION_WHOLE,
-            }
-            .create(device)
-        };
-        let pair: &[wgpu::TextureFormat] = &[LATERAL_FORMAT, LATERAL_FORMAT];
         let compute_layout = util::pipeline_layout(
             device,
             "lateral compute",
@@ -144,17 +122,21 @@ impl LateralMapPass {
                 &dispatch_origin_layout(device),
             ],
         );
+        let terms = plan.lighting.terms;
+        let [transmitted, surface, first, later] =
+            raster_pipelines(device, module, &raster_layout, terms);
         let mut pass = Self {
             module: module.clone(),
-            transmitted: raster("fs_transmitted", pair, util::DepthTest::Nearest),
-            surface: raster("fs_surface", pair, util::DepthTest::Nearest),
+            raster_layout,
+            terms,
+            transmitted,
+            surface,
             transmitted_compute: None,
             bounce_compute: None,
             clear_compute: None,
             compute_layout,
             object_rects: ObjectRects::new(device, &[], 1),
-            bounce: [util::DepthTest::Nearest, util::DepthTest::Prepassed]
-                .map(|depth| raster("fs_bounce", &[LATERAL_FORMAT], depth)),
+            bounce: [first, later],
             transmitted_map: false,
             bounce_layer: None,
         };
@@ -163,27 +145,40 @@ impl LateralMapPass {
     }
 
     /// Takes `plan`'s map (what it holds, each object's box) and builds the compute
-    /// evaluations it asks for that the pass does not hold yet.
+    /// evaluations it asks for that the pass does not hold yet; other terms than the pass's
+    /// build every pipeline again.
     pub fn prepare(&mut self, device: &wgpu::Device, plan: &FramePlan) {
         self.transmitted_map = plan.transmitted_map;
         self.bounce_layer = plan.bounce_layer;
         self.object_rects = ObjectRects::new(device, &plan.object_rects, plan.lateral_downsample);
+        if plan.lighting.terms != self.terms {
+            self.terms = plan.lighting.terms;
+            let [transmitted, surface, first, later] =
+                raster_pipelines(device, &self.module, &self.raster_layout, self.terms);
+            (self.transmitted, self.surface, self.bounce) = (transmitted, surface, [first, later]);
+            (
+                self.transmitted_compute,
+                self.bounce_compute,
+                self.clear_compute,
+            ) = (None, None, None);
+        }
         if !plan.lateral.compute {
             return;
         }
+        let whole = diffusion_whole(self.terms, WHOLE);
         if plan.transmitted_map && self.transmitted_compute.is_none() {
-            let constants = spread_constants(&DIFFUSION_SPREAD);
+            let constants = spread_constants(&diffusion_whole(self.terms, SPREAD));
             self.transmitted_compute =
                 Some(self.build_compute(device, "cs_transmitted", &constants));
         }
         if plan.bounce_layer.is_some() && self.bounce_compute.is_none() {
-            let constants = spread_constants(&DIFFUSION_WHOLE);
+            let constants = spread_constants(&whole);
             self.bounce_compute = Some(self.build_compute(device, "cs_bounce", &constants));
         }
         if self.clear_compute.is_none()
             && (self.transmitted_compute.is_some() || self.bounce_compute.is_some())
         {
-            self.clear_compute = Some(self.build_compute(device, "cs_clear", &DIFFUSION_WHOLE));
+            self.clear_compute = Some(self.build_compute(device, "cs_clear", &whole));
         }
     }
 
@@ -407,4 +402,42 @@ struct Groups<'a> {
     frame: &'a wgpu::BindGroup,
     maps: &'a [wgpu::BindGroup],
     default_maps: &'a wgpu::BindGroup,
+}
+
+/// The map's raster pipelines with `terms`: `fs_transmitted` and `fs_surface` (each keeping
+/// the nearest surface in the map's z-buffer), and `fs_bounce` as the first pass of a frame
+/// and after another.
+fn raster_pipelines(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    terms: Terms,
+) -> [wgpu::RenderPipeline; 4] {
+    let constants = diffusion_whole(terms, WHOLE);
+    // Back faces culled, so no depth pre-pass is needed to run the taps about once a texel
+    // (the lighting pass draws both sides, for open meshes: a pixel whose back face shows
+    // finds no texel of its surface and takes the chord's slab alone; mesh transforms keep
+    // mirrored objects' winding, `Mesh::transform`).
+    let raster = |fragment, targets, depth| {
+        util::MeshPipeline {
+            label: "lateral",
+            layout,
+            module,
+            vertex: "vs_main",
+            fragment,
+            targets,
+            cull_mode: Some(wgpu::Face::Back),
+            depth,
+            constants: &constants,
+        }
+        .create(device)
+    };
+    let pair: &[wgpu::TextureFormat] = &[LATERAL_FORMAT, LATERAL_FORMAT];
+    let single: &[wgpu::TextureFormat] = &[LATERAL_FORMAT];
+    [
+        raster("fs_transmitted", pair, util::DepthTest::Nearest),
+        raster("fs_surface", pair, util::DepthTest::Nearest),
+        raster("fs_bounce", single, util::DepthTest::Nearest),
+        raster("fs_bounce", single, util::DepthTest::Prepassed),
+    ]
 }

@@ -116,7 +116,7 @@ struct TextureSpace {
 // layer (-1 where nothing was drawn).
 @group(0) @binding(3) var tsm_atlas: texture_2d_array<f32>;
 
-// `diffusion`'s transmitted light at reduced resolution (lighting.rs, `LateralTargets`):
+// `diffusion`'s transmitted light at reduced resolution (lateral_map/targets.rs, `LateralTargets`):
 // layer 0 its diffuse part, layer 1 its unscattered and singly scattered part, every light's
 // radiance summed, a = the texel's view depth (0: nothing there); the bounce's layer after
 // them. Group 3 of the lighting pass; the lateral and bounce passes have no group 3.
@@ -141,7 +141,7 @@ fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0)
 // Where the map has no texel of the pixel's surface (an outline, a depth edge) the pixel takes
 // none: gathering there per pixel, like the lateral taps, doubled the lighting pass on
 // lavapipe, which runs a loop's body for every pixel once some pixel enters it.
-// Each source has its own pipeline (lighting.rs, `bounce_source`): 0 none, 1 the map, 2 a
+// Each source has its own pipeline (frame_plan.rs, `LightingVariant::bounce`): 0 none, 1 the map, 2 a
 // gather per pixel; the default (the texture-space pass, which never calls this) keeps all.
 override BOUNCE_SOURCE: u32 = 255u;
 

@@ -28,7 +28,9 @@ use crate::gpu::GpuContext;
 use crate::gpu::object::GpuObject;
 use crate::passes::lateral_map::LateralMapPass;
 use crate::passes::maps;
-use crate::passes::overrides::{BOUNCE_SOURCE, LATERAL_SOURCE, TRANSMITTANCE_METHOD};
+use crate::passes::overrides::{
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD,
+};
 use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
@@ -120,6 +122,7 @@ fn lighting_pipeline(
             (TRANSMITTANCE_METHOD, f64::from(variant.method)),
             (BOUNCE_SOURCE, f64::from(variant.bounce)),
             (LATERAL_SOURCE, f64::from(variant.lateral)),
+            (DIFFUSION_TERMS, f64::from(variant.terms.0)),
         ],
     }
     .create(device)
