@@ -8,6 +8,8 @@ held-out third, and their path-traced references.
     python3 tools/reference/suite.py depth-sweep NAME --depths 64,256,1024 [--spp N] [--size S]
     python3 tools/reference/suite.py check [NAME ...]
     python3 tools/reference/suite.py queue               # the render order
+    python3 tools/reference/suite.py report [NAME ...]   # real-time errors: references/suite/report.json,
+                                                         # a Markdown table, docs/images/generalization.png
 
 Run from the repository root with a `subsurface` binary (SUBSURFACE_BIN, else target/release or
 target/debug) and Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`; libllvm19 for the fast
@@ -43,6 +45,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -983,6 +986,312 @@ def cmd_depth_sweep(a):
             for r, l in zip(table, last)))
 
 
+# ---------------------------------------------------------------------------------------------
+# Report (issue 39, item 4): the real-time renderer's region errors against the references
+# ---------------------------------------------------------------------------------------------
+
+REPORT_BANDS = (0.10, 0.20, 0.25, 0.35)  # shares of regions within these relative errors
+REPORT_SE_MAX = 0.05  # regions whose reference is noisier than this are counted apart
+REPORT_AXES = ("medium", "shape", "light", "region")  # the breakdowns: a failure class is a row
+# `subsurface compare` adds a region of its own, "skin" (every pixel of a scattering
+# material): kept in report.json, but not one of the suite's regions, so not in the shares.
+COMPARE_WHOLE = "skin"
+
+
+def settings_table(exe, env):
+    """`subsurface settings` as {key: (default, description)}."""
+    r = subprocess.run([exe, "settings"], capture_output=True, text=True, env=env)
+    if r.returncode != 0:
+        sys.exit(f"error: {exe} settings: {r.stderr.strip()}")
+    out = {}
+    for line in r.stdout.splitlines():
+        m = re.match(r"^(\S+)\s+=\s+(.*?)\s{2,}(.*)$", line) or re.match(r"^(\S+)\s+=\s+(\S+)\s+(.*)$", line)
+        if m:
+            out[m.group(1)] = (m.group(2).strip().strip('"'), m.group(3).strip())
+    return out
+
+
+def report_configs(exe, env, quality=None):
+    """The configurations: the defaults, `paper` transmittance, and each value of a quality
+    preset when `subsurface settings` lists a key named *quality* (its values parsed from the
+    description's leading "a, b or c", or given by --quality)."""
+    configs = {"default": [], "paper": ["--transmittance", "paper"]}
+    for key, (default, desc) in settings_table(exe, env).items():
+        if "quality" not in key.split(".")[-1]:
+            continue
+        if quality:
+            values = quality.split(",")
+        else:
+            m = re.match(r"^((?:[\w.-]+, )*[\w.-]+ or [\w.-]+)\b", desc)
+            values = re.split(r", | or ", m.group(1)) if m else []
+            if not values:
+                print(f"warning: {key}: cannot read its values from {desc!r}; pass --quality V1,V2", file=sys.stderr)
+        for v in values:
+            if v != default:
+                configs[f"quality={v}"] = ["--set", f"{key}={v}"]
+    return configs
+
+
+def run_compare(exe, env, name, args, tmp, supersample=1):
+    ref = os.path.join(REFS, name + ".exr")
+    cmd = [exe, "compare", ref, os.path.join(SCENES, name + ".toml"),
+           "--regions", os.path.join(SCENES, name + ".regions.json"),
+           "--json", "--out", os.path.join(tmp, "x.png")] + args
+    if supersample > 1:
+        cmd += ["--supersample", str(supersample)]
+    for attempt in range(3):  # a reference replaced mid-read (a refinement round) reads again
+        r = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp)
+        if r.returncode == 0:
+            return json.loads(r.stdout)
+        time.sleep(5)
+    raise RuntimeError(f"{name} {' '.join(args)}: {r.stderr.strip()}")
+
+
+def report_stats(rows):
+    """Shares within each band, mean |error|, mean error and the worst region of rows
+    [(scene, region, error), ...] (errors already freed of the noisy and the black ones)."""
+    n = len(rows)
+    if not n:
+        return {"n": 0}
+    errs = [e for _, _, e in rows]
+    worst = max(rows, key=lambda r: abs(r[2]))
+    return {
+        "n": n,
+        "scenes": len({s for s, _, _ in rows}),
+        "within": {f"{round(100 * b)}": sum(abs(e) <= b for e in errs) / n for b in REPORT_BANDS},
+        "mean_abs": sum(abs(e) for e in errs) / n,
+        "mean": sum(errs) / n,
+        "worst": {"scene": worst[0], "region": worst[1], "error": worst[2]},
+    }
+
+
+def report_rows(scenes, cfg, part=None, **tags):
+    """(scene, region, error) of every counted region of one configuration, filtered by part
+    ("tuning"/"held_out") and tags (medium=..., shape=..., light=..., region=...)."""
+    rows = []
+    for name, s in scenes.items():
+        if part and (part == "held_out") != s["held_out"]:
+            continue
+        if any(k != "region" and s[k] != v for k, v in tags.items()):
+            continue
+        for rname, g in s["configs"][cfg]["regions"].items():
+            if "region" in tags and rname != tags["region"]:
+                continue
+            if g["error"] is None or g["stderr"] is None or g["stderr"] > REPORT_SE_MAX:
+                continue
+            rows.append((name, rname, g["error"]))
+    return rows
+
+
+def report_markdown(doc):
+    scenes, configs = doc["scenes"], list(doc["configs"])
+    pct = lambda x: "–" if x is None else f"{100 * x:+.0f}%"
+    share = lambda x: f"{100 * x:.0f}%"
+    held = sum(s["held_out"] for s in scenes.values())
+    L = [f"{len(scenes)} scenes with a reference ({len(scenes) - held} tuning, {held} held out), "
+         f"{doc['counted_regions']} regions counted, {len(doc['noisy'])} apart (reference standard error "
+         f"> {100 * REPORT_SE_MAX:.0f} %) and {len(doc['black'])} with a black reference. "
+         "Error = (real-time − reference) / reference of the region's mean luminance.", ""]
+    L.append("| configuration | part | scenes | regions | " + " | ".join(f"±{round(100 * b)} %" for b in REPORT_BANDS)
+             + " | mean \\|err\\| | mean err | worst region |")
+    L.append("|---|---|---:|---:|" + "---:|" * len(REPORT_BANDS) + "---:|---:|---|")
+    for cfg in configs:
+        for part in ("tuning", "held_out", "all"):
+            st = doc["summary"][cfg][part]
+            if not st["n"]:
+                L.append(f"| `{cfg}` | {part.replace('_', ' ')} | 0 | 0 |" + " |" * (len(REPORT_BANDS) + 3))
+                continue
+            w = st["worst"]
+            L.append(f"| `{cfg}` | {part.replace('_', ' ')} | {st['scenes']} | {st['n']} | "
+                     + " | ".join(share(st["within"][k]) for k in st["within"])
+                     + f" | {100 * st['mean_abs']:.1f}% | {pct(st['mean'])} | {w['scene']} {w['region']} {pct(w['error'])} |")
+    L.append("")
+    for axis in REPORT_AXES:
+        L.append(f"By {axis} (tuning and held out together; held-out regions in brackets):")
+        L.append("")
+        L.append(f"| {axis} | regions | " + " | ".join(
+            f"`{c}` ±20 % | `{c}` ±25 % | `{c}` mean | `{c}` worst" for c in configs) + " |")
+        L.append("|---|---:|" + "---:|---:|---:|---|" * len(configs))
+        for value, per in doc["by"][axis].items():
+            st0 = per[configs[0]]
+            if not st0["n"]:
+                continue
+            cells = []
+            for c in configs:
+                st = per[c]
+                w = st["worst"]
+                cells.append(f"{share(st['within']['20'])} | {share(st['within']['25'])} | {pct(st['mean'])} | "
+                             f"{pct(w['error'])} {'--'.join(x for x in w['scene'].split('--') if x != value)}"
+                             + (f" {w['region']}" if axis != "region" else ""))
+            label = value
+            if axis == "light":
+                label += " (" + " + ".join(f"{az:g}°" for az, _, _ in LIGHTS[value]) + ")"
+            L.append(f"| {label} | {st0['n']} ({per['held_out_n']}) | " + " | ".join(cells) + " |")
+        L.append("")
+    L.append(f"The worst regions of `{configs[0]}` (|error| > 25 %):")
+    L.append("")
+    L.append("| scene | part | region | " + " | ".join(f"`{c}`" for c in configs) + " | reference s.e. |")
+    L.append("|---|---|---|" + "---:|" * len(configs) + "---:|")
+    worst = sorted(((n, r, g) for n, s in scenes.items() for r, g in s["configs"][configs[0]]["regions"].items()
+                    if g["error"] is not None and g["stderr"] is not None and g["stderr"] <= REPORT_SE_MAX
+                    and abs(g["error"]) > 0.25), key=lambda t: -abs(t[2]["error"]))
+    if not worst:
+        L.append("| none | | |" + " |" * (len(configs) + 1))
+    for n, r, g in worst:
+        L.append(f"| {n} | {'held out' if scenes[n]['held_out'] else 'tuning'} | {r} | "
+                 + " | ".join(pct(scenes[n]["configs"][c]["regions"][r]["error"]) for c in configs)
+                 + f" | {100 * g['stderr']:.1f}% |")
+    L.append("")
+    if doc["noisy"] or doc["black"]:
+        L.append(f"Counted apart: regions whose reference standard error is above {100 * REPORT_SE_MAX:.0f} % "
+                 "(or whose reference is black):")
+        L.append("")
+        L.append("| scene | part | region | reference s.e. | " + " | ".join(f"`{c}`" for c in configs) + " |")
+        L.append("|---|---|---|---:|" + "---:|" * len(configs))
+        for n, r in doc["noisy"] + doc["black"]:
+            g0 = scenes[n]["configs"][configs[0]]["regions"][r]
+            se = "black" if g0["stderr"] is None else f"{100 * g0['stderr']:.1f}%"
+            L.append(f"| {n} | {'held out' if scenes[n]['held_out'] else 'tuning'} | {r} | {se} | "
+                     + " | ".join(pct(scenes[n]["configs"][c]["regions"][r]["error"]) for c in configs) + " |")
+        L.append("")
+    return "\n".join(L)
+
+
+def report_histogram(doc, path):
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib is not installed (python3 -m pip install matplotlib): no histogram", file=sys.stderr)
+        return False
+    configs = list(doc["configs"])
+    lo, hi, step = -100, 150, 5
+    edges = list(range(lo, hi + step, step))
+    fig, axes = plt.subplots(1, len(configs), figsize=(5.5 * len(configs), 4), sharey=True, squeeze=False)
+    for ax, cfg in zip(axes[0], configs):
+        for part, colour, label in (("tuning", "tab:blue", "tuning"), ("held_out", "tab:orange", "held out")):
+            errs = [min(max(100 * e, lo + 0.01), hi - 0.01) for _, _, e in report_rows(doc["scenes"], cfg, part)]
+            if not errs:
+                continue
+            w = [100 / len(errs)] * len(errs)
+            ax.hist(errs, bins=edges, weights=w, histtype="stepfilled", alpha=0.35, color=colour,
+                    label=f"{label} ({len(errs)} regions)")
+            ax.hist(errs, bins=edges, weights=w, histtype="step", color=colour)
+        for x, style in ((20, ":"), (25, "--"), (35, "-")):
+            for sgn in (-1, 1):
+                ax.axvline(sgn * x, color="grey", linestyle=style, linewidth=0.8,
+                           label=f"±{x} %" if sgn > 0 else None)
+        ax.axvline(0, color="black", linewidth=0.6)
+        ax.set_title(f"{cfg}")
+        ax.set_xlabel(f"region error, real-time vs path-traced (%; clipped to {lo}..{hi})")
+        ax.set_xlim(lo, hi)
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel("share of the part's regions (%)")
+    fig.suptitle(f"Issue 39 suite: {len(doc['scenes'])} scenes, region errors "
+                 f"(reference s.e. ≤ {100 * REPORT_SE_MAX:.0f} %)", fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def cmd_report(a):
+    exe = subsurface_bin()
+    env = dict(os.environ)
+    env.setdefault("WGPU_BACKEND", "vulkan")
+    assets = os.path.normpath(os.path.join(ROOT, "..", "shared", "assets"))
+    if os.path.isdir(assets):
+        env.setdefault("SUBSURFACE_ASSETS", assets)
+    meta = json.load(open(os.path.join(SCENES, "suite.json")))["scenes"]
+    held = set(load_holdout()["held_out"])
+    manifest = load_manifest()["references"]
+    names = [n for n in (a.names or design()) if os.path.isfile(os.path.join(REFS, n + ".exr")) and n in manifest]
+    configs = report_configs(exe, env, a.quality)
+    print(f"{len(names)} references; configurations: " + ", ".join(f"{k} {' '.join(v)}".strip() for k, v in configs.items()),
+          file=sys.stderr)
+    scenes = {}
+    t0 = time.time()
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, name in enumerate(names):
+            shape, medium, light = design()[name]
+            s = scenes[name] = {"shape": shape, "medium": medium, "light": light,
+                                "light_dirs": [list(l[:2]) + [l[2]] for l in LIGHTS[light]],
+                                "held_out": name in held, "spp": manifest[name]["spp"],
+                                "max_depth": manifest[name]["max_depth"], "configs": {}}
+            for cfg, args in configs.items():
+                j = run_compare(exe, env, name, args, tmp, a.supersample)
+                regions = {g["name"]: {"error": g["rel_error"], "stderr": g["rel_stderr"]}
+                           for g in j["regions"] if g["name"] != COMPARE_WHOLE}
+                missing = set(meta[name]["regions"]) - set(regions)
+                if missing:
+                    raise RuntimeError(f"{name}: compare did not report {sorted(missing)}")
+                whole = next((g for g in j["regions"] if g["name"] == COMPARE_WHOLE), None)
+                s["configs"][cfg] = {
+                    "regions": regions,
+                    "whole": None if whole is None else {"error": whole["rel_error"], "stderr": whole["rel_stderr"]},
+                    "rmse_debiased": j.get("rmse_debiased"), "rel_rmse_debiased": j.get("rel_rmse_debiased"),
+                    "flip_mean": j.get("flip_mean"),
+                }
+                print(f"[{k + 1}/{len(names)}] {name:26s} {cfg:10s} " + " ".join(
+                    f"{r} " + ("n/a" if g["error"] is None else f"{100 * g['error']:+.0f}%")
+                    + ("(noisy)" if g["stderr"] is not None and g["stderr"] > REPORT_SE_MAX else "")
+                    for r, g in regions.items()), file=sys.stderr, flush=True)
+    c0 = next(iter(configs))
+    noisy = [(n, r) for n, s in scenes.items() for r, g in s["configs"][c0]["regions"].items()
+             if g["stderr"] is not None and g["stderr"] > REPORT_SE_MAX and g["error"] is not None]
+    black = [(n, r) for n, s in scenes.items() for r, g in s["configs"][c0]["regions"].items()
+             if g["error"] is None or g["stderr"] is None]
+    doc = {
+        "generated_by": "tools/reference/suite.py report",
+        "about": "Issue 39, item 4: every region's relative error of mean luminance, (real-time - reference) / "
+                 "reference, per configuration, with the reference's relative standard error; summary shares "
+                 f"leave out regions whose reference standard error is above {REPORT_SE_MAX} (listed in noisy) "
+                 "or whose reference is black.",
+        "date": datetime.datetime.now().isoformat(timespec="seconds"),
+        "binary": exe,
+        "wgpu_backend": env.get("WGPU_BACKEND"),
+        "supersample": a.supersample,
+        "configs": configs,
+        "bands": list(REPORT_BANDS),
+        "stderr_max": REPORT_SE_MAX,
+        "scenes_total": len(design()),
+        "counted_regions": len(report_rows(scenes, c0)),
+        "noisy": noisy,
+        "black": black,
+        "seconds": round(time.time() - t0, 1),
+    }
+    doc["summary"] = {c: {p: report_stats(report_rows(scenes, c, None if p == "all" else p))
+                          for p in ("tuning", "held_out", "all")} for c in configs}
+    doc["by"] = {}
+    for axis in REPORT_AXES:
+        if axis == "region":
+            values = sorted({r for s in scenes.values() for r in s["configs"][c0]["regions"]})
+        else:
+            order = {"medium": list(MEDIA), "shape": list(SHAPES), "light": list(LIGHTS)}[axis]
+            values = [v for v in order if any(s[axis] == v for s in scenes.values())]
+        doc["by"][axis] = {}
+        for v in values:
+            per = {c: report_stats(report_rows(scenes, c, **{axis: v})) for c in configs}
+            per["held_out_n"] = len(report_rows(scenes, c0, "held_out", **{axis: v}))
+            doc["by"][axis][v] = per
+    doc["scenes"] = scenes
+    out = a.out or os.path.join(REFS, "report.json")
+    with open(out, "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+    md = report_markdown(doc)
+    print(md)
+    if a.markdown:
+        with open(a.markdown, "w") as f:
+            f.write(md + "\n")
+    hist = a.histogram or os.path.join(ROOT, "docs", "images", "generalization.png")
+    drawn = report_histogram(doc, hist)
+    print(f"wrote {out}" + (f", {hist}" if drawn else "") + f" ({doc['seconds']:.0f} s)", file=sys.stderr)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -1016,6 +1325,14 @@ def main():
     c = sub.add_parser("check", help="region means and standard errors of the rendered references")
     c.add_argument("names", nargs="*")
     sub.add_parser("queue", help="print the render order")
+    rp = sub.add_parser("report", help="the real-time renderer's region errors against every reference: "
+                        "references/suite/report.json, a Markdown table, docs/images/generalization.png")
+    rp.add_argument("names", nargs="*", help="default: every scene whose reference exists")
+    rp.add_argument("--quality", metavar="V1,V2", help="values of a quality setting (default: read from `subsurface settings`)")
+    rp.add_argument("--supersample", type=int, default=1, help="compare --supersample N (default 1, as fidelity_table.py)")
+    rp.add_argument("--out", help="default: references/suite/report.json")
+    rp.add_argument("--markdown", metavar="FILE", help="also write the Markdown tables to FILE")
+    rp.add_argument("--histogram", metavar="PNG", help="default: docs/images/generalization.png")
     a = p.parse_args()
     if a.cmd == "generate":
         cmd_generate(a)
@@ -1027,6 +1344,8 @@ def main():
         cmd_depth_sweep(a)
     elif a.cmd == "check":
         cmd_check(a)
+    elif a.cmd == "report":
+        cmd_report(a)
     elif a.cmd == "queue":
         held = set(load_holdout()["held_out"])
         for n in render_queue():
