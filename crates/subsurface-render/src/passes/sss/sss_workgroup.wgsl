@@ -68,7 +68,9 @@ fn load_line(group: vec3<u32>, index: u32) -> Line {
 fn store_line(texel: vec2<i32>, sum: vec3<f32>, c: Centre) {
     if (u.seed == 0u) {
         textureStore(out_packed, texel, pack(sum, c));
-    } else {
+    } else if (c.strength > 0.0) {
+        // The pass works in place on the diffuse target: a pixel that is not skin already holds
+        // its colour there, so only skin is written back.
         textureStore(out_color, texel, vec4<f32>(sum, 1.0));
     }
 }
