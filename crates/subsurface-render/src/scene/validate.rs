@@ -1,6 +1,8 @@
 //! Parsing a scene file and checking every value (ranges in `docs/scene-format.md`).
 
 use glam::Vec3;
+use serde::de::IgnoredAny;
+use subsurface_profile::exact_array::exact_opt;
 
 use super::desc::{LightKind, MeshDesc, SceneDesc};
 use super::error::{SceneError, one_line};
@@ -15,6 +17,55 @@ fn line_col(s: &str, offset: usize) -> (usize, usize) {
         .map_or(0, |p| p + 1);
     let col = s[line_start..offset].chars().count() + 1;
     (line, col)
+}
+
+/// A TOML error as a [`SceneError::Toml`] naming the file, `line:col` and the key path.
+fn toml_error(s: &str, file: &str, mut e: toml::de::Error) -> SceneError {
+    let line_col = e.span().map(|sp| line_col(s, sp.start));
+    let msg = one_line(e.message());
+    // Without its input, toml's Display appends "in `a.b.c`" (the key path).
+    e.set_input(None);
+    let keys = e.to_string().lines().rev().find_map(|l| {
+        l.strip_prefix("in `")?
+            .strip_suffix('`')
+            .map(str::to_string)
+    });
+    SceneError::Toml {
+        file: file.to_string(),
+        line_col,
+        msg: match keys {
+            Some(k) if !k.is_empty() => format!("{k}: {msg}"),
+            _ => msg,
+        },
+    }
+}
+
+/// The fixed-length arrays of `[render]` whose struct (`settings/mod.rs`) does not yet read
+/// them with [`exact`]: parsed a second time, alone, so that `ambient = [0.1, 0.1, 0.1, "x"]`
+/// is an error like every other array's rather than three numbers. (Drop this once
+/// `RenderSettings::ambient` and `background` carry `deserialize_with = "exact"`.)
+#[derive(serde::Deserialize)]
+struct RenderArrays {
+    #[serde(default)]
+    #[allow(dead_code)]
+    render: RenderArraysInner,
+}
+
+#[derive(Default, serde::Deserialize)]
+#[allow(dead_code)]
+struct RenderArraysInner {
+    #[serde(default, deserialize_with = "exact_opt")]
+    ambient: Option<[IgnoredAny; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    background: Option<[IgnoredAny; 3]>,
+}
+
+/// A 32-bit field written as `1e39` reads as infinity: "(got inf)" said nothing of what was
+/// written, so an infinite value is explained as the overflow it (almost always) is.
+pub(crate) fn explain_inf(msg: &str) -> String {
+    const OUT: &str = "out of the 32-bit float range, whose largest is 3.4e38";
+    msg.replace("(got inf)", &format!("(got inf: {OUT})"))
+        .replace("(got -inf)", &format!("(got -inf: {OUT})"))
 }
 
 /// The longest target - position a camera or light may have: its square must stay a finite
@@ -38,9 +89,12 @@ impl Check<'_> {
         if x.is_finite() && ok {
             Ok(())
         } else if rule.is_empty() {
-            Err(self.err(field, format!("must be finite (got {x})")))
+            Err(self.err(field, explain_inf(&format!("must be finite (got {x})"))))
         } else {
-            Err(self.err(field, format!("must be finite and {rule} (got {x})")))
+            Err(self.err(
+                field,
+                explain_inf(&format!("must be finite and {rule} (got {x})")),
+            ))
         }
     }
     fn finite(&self, field: &str, x: f32) -> Result<(), SceneError> {
@@ -80,28 +134,24 @@ impl Check<'_> {
     }
 }
 
+/// A medium's error naming the coefficient in the scene's words:
+/// `objects[0].material.medium.sigma_a.r: must be ...`.
+fn medium_error(c: &Check, field: &str, e: &subsurface_profile::ProfileError) -> SceneError {
+    let e = e.to_string();
+    match e.split_once(": ") {
+        Some((coeff, msg)) if coeff.starts_with("sigma_") || coeff == "eta" => {
+            c.err(format!("{field}.{coeff}"), msg)
+        }
+        _ => c.err(field, e),
+    }
+}
+
 impl SceneDesc {
     /// Parses and validates a scene. `name_for_errors` names the file in errors.
     pub fn from_toml_str(s: &str, name_for_errors: &str) -> Result<Self, SceneError> {
-        let desc: SceneDesc = toml::from_str(s).map_err(|mut e| {
-            let line_col = e.span().map(|sp| line_col(s, sp.start));
-            let msg = one_line(e.message());
-            // Without its input, toml's Display appends "in `a.b.c`" (the key path).
-            e.set_input(None);
-            let keys = e.to_string().lines().rev().find_map(|l| {
-                l.strip_prefix("in `")?
-                    .strip_suffix('`')
-                    .map(str::to_string)
-            });
-            SceneError::Toml {
-                file: name_for_errors.to_string(),
-                line_col,
-                msg: match keys {
-                    Some(k) if !k.is_empty() => format!("{k}: {msg}"),
-                    _ => msg,
-                },
-            }
-        })?;
+        let toml_err = |e| toml_error(s, name_for_errors, e);
+        let desc: SceneDesc = toml::from_str(s).map_err(toml_err)?;
+        toml::from_str::<RenderArrays>(s).map_err(toml_err)?;
         desc.validate(name_for_errors)?;
         Ok(desc)
     }
@@ -159,8 +209,18 @@ impl SceneDesc {
         // render
         self.render
             .validate()
-            .map_err(|e| c.err(format!("render.{}", e.field), e.message))?;
+            .map_err(|e| c.err(format!("render.{}", e.field), explain_inf(&e.message)))?;
         // lights
+        let max_lights = crate::uniforms::MAX_LIGHTS;
+        if self.lights.len() > max_lights {
+            return Err(c.err(
+                "lights",
+                format!(
+                    "at most {max_lights} lights are supported (got {})",
+                    self.lights.len()
+                ),
+            ));
+        }
         for (i, l) in self.lights.iter().enumerate() {
             let f = |k: &str| format!("lights[{i}].{k}");
             c.finite3(&f("position"), l.position)?;
@@ -268,7 +328,7 @@ impl SceneDesc {
             // validates also loads (unknown preset, coefficient <= 0 or NaN, bad eta).
             m.medium
                 .material()
-                .map_err(|e| c.err(f("medium"), e.to_string()))?;
+                .map_err(|e| medium_error(&c, &f("medium"), &e))?;
             if let Some(k) = m.kernel_strength {
                 c.unit3(&f("kernel_strength"), k)?;
             }
