@@ -121,7 +121,7 @@ pub(super) fn check_uri(uri: &str, base: Option<&Path>, what: &str) -> Result<()
         ));
     }
     crate::input::check_regular(&path, MAX_BUFFER_BYTES)
-        .map_err(|e| format!("{what}: {}: {e}", path.display()))?;
+        .map_err(|e| format!("{what}: cannot read {}: {e}", path.display()))?;
     Ok(())
 }
 
