@@ -86,9 +86,26 @@ pub fn medium_per_unit(m: &Dipole, object: &Object) -> ([f64; 3], [f64; 3]) {
     (sigma_a, sigma_s)
 }
 
+/// A number as Mitsuba reads it (a 32-bit float), in a form that reads back as exactly that
+/// float: Rust's shortest round-trip digits, in exponent form outside 1e-4..1e7. Nine fixed
+/// decimals wrote `sigma_a = 1e-40` as `scale="0.000000000"`, an empty medium.
+fn num(x: f64) -> String {
+    let x = x as f32;
+    if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 fn v3(v: impl Into<Vec3>) -> String {
     let v = v.into();
-    format!("{:.9}, {:.9}, {:.9}", v.x, v.y, v.z)
+    format!(
+        "{}, {}, {}",
+        num(v.x.into()),
+        num(v.y.into()),
+        num(v.z.into())
+    )
 }
 
 /// Mitsuba reads every number as a 32-bit float: a value past f32::MAX would be infinite
@@ -105,7 +122,7 @@ fn fits(field: &str, what: &str, values: &[f64]) -> Result<()> {
 }
 
 fn rgb(c: [f64; 3]) -> String {
-    format!("{:.9}, {:.9}, {:.9}", c[0], c[1], c[2])
+    format!("{}, {}, {}", num(c[0]), num(c[1]), num(c[2]))
 }
 
 /// An up vector for `lookat` that is not parallel to the view direction.
@@ -212,7 +229,7 @@ pub fn scene_xml(
     writeln!(
         x,
         "  <sensor type=\"perspective\">\n    <string name=\"fov_axis\" value=\"y\"/>\n    \
-         <float name=\"fov\" value=\"{:.9}\"/>\n    <transform name=\"to_world\">\n      \
+         <float name=\"fov\" value=\"{}\"/>\n    <transform name=\"to_world\">\n      \
          <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    \
          <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"$spp\"/>\n      \
          <integer name=\"seed\" value=\"$seed\"/>\n    </sampler>\n    \
@@ -220,7 +237,7 @@ pub fn scene_xml(
          <integer name=\"height\" value=\"$height\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      \
          <!-- A box filter: one pixel is one pixel of the rasteriser (no wider reconstruction). -->\n      \
          <rfilter type=\"box\"/>\n    </film>\n  </sensor>",
-        cam.fov_y_deg,
+        num(cam.fov_y_deg.into()),
         v3(pos),
         v3(target),
         v3(up)
@@ -337,12 +354,13 @@ pub fn scene_xml(
                  sss_width))",
                 &[sa, ss].concat(),
             )?;
-            // Below the smallest f32 the medium would be empty (sigma_t = 0: no scattering).
+            // Below the smallest normal f32 the medium would be empty or lose its precision
+            // (sigma_t = 0: no scattering; Mitsuba may flush subnormals to zero).
             anyhow::ensure!(
-                st.iter().all(|&v| v as f32 > 0.0),
+                st.iter().all(|&v| v as f32 >= f32::MIN_POSITIVE),
                 "{field}: the medium's sigma_t would be {:e} per scene unit in the Mitsuba \
-                 scene, below the smallest 32-bit float (mm_per_unit / (scale x sss_width) is \
-                 too small)",
+                 scene, below the smallest normal 32-bit float (mm_per_unit / (scale x \
+                 sss_width) is too small)",
                 st.iter().copied().fold(f64::INFINITY, f64::min)
             );
             writeln!(
@@ -353,7 +371,7 @@ pub fn scene_xml(
                  <float name=\"ext_ior\" value=\"1.0\"/>\n    </bsdf>\n    \
                  <medium type=\"homogeneous\" name=\"interior\">\n      \
                  <rgb name=\"albedo\" value=\"{}\"/>\n      <rgb name=\"sigma_t\" value=\"{}\"/>\n      \
-                 <float name=\"scale\" value=\"{:.9}\"/>\n      <phase type=\"isotropic\"/>\n    </medium>",
+                 <float name=\"scale\" value=\"{}\"/>\n      <phase type=\"isotropic\"/>\n    </medium>",
                 m.medium.to_string().replace("--", "- -"),
                 mm.sigma_a,
                 mm.sigma_s_prime,
@@ -364,7 +382,7 @@ pub fn scene_xml(
                 mm.eta,
                 rgb(albedo),
                 rgb(st.map(|s| s / scale)),
-                scale
+                num(scale)
             )?;
         } else {
             writeln!(
@@ -409,21 +427,43 @@ pub fn export(
         .collect::<Result<_>>()
         .with_context(|| source.to_string())?;
     let meshes = out.join("meshes");
+    // The folders this export creates, outermost first: removed again (when still empty) if
+    // the export fails, so a failed write ("File too large") leaves no empty meshes/ behind.
+    let created: Vec<PathBuf> = [out.to_path_buf(), meshes.clone()]
+        .into_iter()
+        .filter(|d| !d.exists())
+        .collect();
     std::fs::create_dir_all(&meshes)
         .with_context(|| format!("{}: cannot create", meshes.display()))?;
+    let written = write_files(&meshes, &plys, &out.join("scene.xml"), &xml);
+    if written.is_err() {
+        for d in created.iter().rev() {
+            let _ = std::fs::remove_dir(d);
+        }
+    }
+    written.map(|()| warnings)
+}
+
+/// Writes every file through a temporary file and commits them only when all are written.
+fn write_files(
+    meshes: &Path,
+    plys: &[(String, Vec<u8>)],
+    xml_path: &Path,
+    xml: &str,
+) -> Result<()> {
     let mut pending = Vec::new();
-    for (name, bytes) in &plys {
+    for (name, bytes) in plys {
         let mut p = crate::output::PendingFile::create(&meshes.join(name))?;
         p.write_bytes(bytes)?;
         pending.push(p);
     }
-    let mut p = crate::output::PendingFile::create(&out.join("scene.xml"))?;
+    let mut p = crate::output::PendingFile::create(xml_path)?;
     p.write_bytes(xml.as_bytes())?;
     pending.push(p);
     for p in pending {
         p.commit()?;
     }
-    Ok(warnings)
+    Ok(())
 }
 
 pub fn run(args: &ExportArgs) -> Result<()> {

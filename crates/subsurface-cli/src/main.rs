@@ -55,6 +55,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    output::ignore_file_size_signal();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&e),
@@ -69,6 +70,16 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(level))
         .format_timestamp(None)
         .init();
+    // The GPU commands check the memory limit's variable before any work (the viewer's
+    // renderer is created only after its window opens).
+    let gpu = matches!(
+        cli.command,
+        Command::Render(_) | Command::Bench(_) | Command::Compare(_) | Command::View(_)
+    );
+    if gpu && let Err(e) = subsurface_render::budget::limit_bytes() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Render(a) => render::run(a, cli.verbose),
         Command::Bench(a) => bench::run(a),

@@ -89,12 +89,7 @@ impl PendingFile {
     where
         P: image::Pixel<Subpixel = u8> + image::PixelWithColorType,
     {
-        use image::ImageEncoder as _;
-        let mut bytes = Vec::new();
-        image::codecs::png::PngEncoder::new(&mut bytes)
-            .write_image(image.as_raw(), image.width(), image.height(), P::COLOR_TYPE)
-            .with_context(|| format!("{}: PNG encoding failed", self.dest.display()))?;
-        self.write_bytes(&bytes)?;
+        self.write_bytes(&png_bytes(image, &self.dest)?)?;
         self.commit()
     }
 
@@ -175,6 +170,31 @@ impl Drop for PendingFile {
     }
 }
 
+/// `image` (8-bit RGB or RGBA) encoded as PNG; `dest` names the file in the error.
+pub fn png_bytes<P>(image: &image::ImageBuffer<P, Vec<u8>>, dest: &Path) -> Result<Vec<u8>>
+where
+    P: image::Pixel<Subpixel = u8> + image::PixelWithColorType,
+{
+    use image::ImageEncoder as _;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(image.as_raw(), image.width(), image.height(), P::COLOR_TYPE)
+        .with_context(|| format!("{}: PNG encoding failed", dest.display()))?;
+    Ok(bytes)
+}
+
+/// Makes a write past the file-size limit (`ulimit -f`) fail with EFBIG, an error the
+/// command reports and cleans up after, instead of killing the process by SIGXFSZ (status
+/// 153), which left `.out.png.partial-PID-0` behind.
+pub fn ignore_file_size_signal() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to SIG_IGN installs no handler code; it is
+    // called once, at start-up, before any thread is spawned.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
 /// Whether `dest` names standard output (`-`, `/dev/stdout`, a link to it), as
 /// [`PendingFile::create`] would find; checked without writing anything.
 pub fn is_stdout(dest: &Path) -> bool {
@@ -238,6 +258,11 @@ fn resolve(dest: &Path) -> Result<Resolved> {
                     .with_context(|| format!("{name}: cannot read the symbolic link"))?;
                 path = parent_dir(&path).join(link);
                 followed = true;
+            }
+            // Replacing it by a rename would succeed in a writable directory; a read-only
+            // file is a request not to.
+            Ok(m) if m.is_file() && m.permissions().readonly() => {
+                bail!("{name}: the file is read-only")
             }
             Ok(m) if m.is_file() => return Ok(Resolved::Replace(path)),
             Ok(m) if m.is_dir() => bail!("{name}: is a directory"),
@@ -447,6 +472,23 @@ mod tests {
             PendingFile::create(&dir.join("loop")).err().unwrap()
         );
         assert!(e.contains("too many levels"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_read_only_file_is_not_replaced() {
+        let dir = tempdir("readonly");
+        let dest = dir.join("a.png");
+        std::fs::write(&dest, b"keep").unwrap();
+        let mut perms = std::fs::metadata(&dest).unwrap().permissions();
+        perms.set_readonly(true);
+        std::fs::set_permissions(&dest, perms.clone()).unwrap();
+        let e = format!("{:#}", PendingFile::create(&dest).err().unwrap());
+        assert!(e.ends_with("a.png: the file is read-only"), "{e}");
+        assert_eq!(std::fs::read(&dest).unwrap(), b"keep");
+        #[allow(clippy::permissions_set_readonly_false)]
+        perms.set_readonly(false);
+        std::fs::set_permissions(&dest, perms).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

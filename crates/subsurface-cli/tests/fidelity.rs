@@ -96,7 +96,7 @@ fn export_writes_the_medium_in_scene_units() {
     let xml = std::fs::read_to_string(out.join("scene.xml")).unwrap();
     // skin1: sigma_t = 0.48 + 1.01 = 1.49 /mm in blue, the largest; metres: x 1000.
     assert!(
-        xml.contains("<float name=\"scale\" value=\"1490.0"),
+        xml.contains("<float name=\"scale\" value=\"1490\""),
         "{xml}"
     );
     assert!(xml.contains("roughdielectric") && xml.contains("int_ior\" value=\"1.3\""));
@@ -115,7 +115,7 @@ fn export_writes_the_medium_in_scene_units() {
             "medium = { sigma_a = [0.01, 0.02, 0.03], sigma_s = [2.0, 2.5, 3.0], eta = 1.4 }",
             [
                 "int_ior\" value=\"1.4\"",
-                "<float name=\"scale\" value=\"3030.0",
+                "<float name=\"scale\" value=\"3030\"",
             ],
             None,
         ),
@@ -123,7 +123,7 @@ fn export_writes_the_medium_in_scene_units() {
             "medium = \"skin\"",
             [
                 "int_ior\" value=\"1.3\"",
-                "<float name=\"scale\" value=\"1490.0",
+                "<float name=\"scale\" value=\"1490\"",
             ],
             Some("exported as Jensen 2001 \"skin1\""),
         ),

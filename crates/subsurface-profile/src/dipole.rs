@@ -10,10 +10,58 @@ use serde::Serialize;
 use crate::error::{CHANNELS, Result, count, in_range, positive};
 use crate::gaussian::bisect;
 
-/// Diffuse Fresnel reflectance `F_dr` of a boundary with relative index `eta`,
-/// the polynomial fit Jensen et al. 2001 use (valid for eta >= 1).
+/// Diffuse Fresnel reflectance `F_dr` of a boundary with relative index `eta` (>= 1): the
+/// share of diffuse light inside the medium that the boundary reflects back in.
+///
+/// Up to [`FDR_POLYNOMIAL_MAX_ETA`] it is the polynomial fit Jensen et al. 2001 use (within
+/// 1e-3 of the exact integral there); beyond, that fit grows past the exact value and reaches
+/// 1 at eta = 3.86 (A = (1 + F_dr) / (1 - F_dr) turned negative, the profile vanished and
+/// `eta = 4`, within the documented 1..=10, failed with "r_max_mm: must be > 0"), so the
+/// exact hemispherical integral [`fresnel_diffuse_reflectance_exact`] takes over, blended
+/// linearly across [`FDR_BLEND_ETA`] so that F_dr stays continuous.
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
-    -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
+    let poly = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
+    let (lo, hi) = FDR_BLEND_ETA;
+    if eta <= lo {
+        return poly;
+    }
+    let exact = fresnel_diffuse_reflectance_exact(eta);
+    let t = ((eta - lo) / (hi - lo)).min(1.0);
+    (1.0 - t) * poly + t * exact
+}
+
+/// Below this eta the polynomial fit of [`fresnel_diffuse_reflectance`] is used alone.
+pub const FDR_POLYNOMIAL_MAX_ETA: f64 = 1.8;
+/// The range of eta over which the polynomial hands over to the exact integral.
+const FDR_BLEND_ETA: (f64, f64) = (FDR_POLYNOMIAL_MAX_ETA, 2.2);
+
+/// Exact internal diffuse Fresnel reflectance: `1 - (1 - F_ext) / eta^2`, with `F_ext =
+/// int_0^1 2 mu F(mu) dmu` the cosine-weighted Fresnel reflectance of light arriving from
+/// outside (no total internal reflection there, so the integrand is smooth; Simpson's rule on
+/// 64 intervals is exact to about 1e-9). Always below 1 for a finite eta.
+pub fn fresnel_diffuse_reflectance_exact(eta: f64) -> f64 {
+    let fresnel_outside = |mu: f64| {
+        let cos_t = (1.0 - (1.0 - mu * mu) / (eta * eta)).max(0.0).sqrt();
+        let rs = (mu - eta * cos_t) / (mu + eta * cos_t);
+        let rp = (eta * mu - cos_t) / (eta * mu + cos_t);
+        0.5 * (rs * rs + rp * rp)
+    };
+    const N: usize = 64;
+    let h = 1.0 / N as f64;
+    // The weight 2 mu is 0 at grazing, where eta = 1 makes the Fresnel term 0 / 0.
+    let f = |i: usize| {
+        let mu = i as f64 * h;
+        if mu == 0.0 {
+            0.0
+        } else {
+            2.0 * mu * fresnel_outside(mu)
+        }
+    };
+    let inner: f64 = (1..N)
+        .map(|i| if i % 2 == 1 { 4.0 } else { 2.0 } * f(i))
+        .sum();
+    let external = h / 3.0 * (f(0) + inner + f(N));
+    1.0 - (1.0 - external) / (eta * eta)
 }
 
 /// Derived per-channel quantities of the diffusion approximation.
@@ -293,6 +341,39 @@ mod tests {
         let rd = skin1().total_reflectance()[0];
         assert!((rd - 0.4361).abs() < 5e-4, "{rd}");
         assert!((fresnel_diffuse_reflectance(1.0) - 0.0016).abs() < 1e-12);
+    }
+
+    /// Jensen's polynomial F_dr passed 1 at eta = 3.86 (A < 0), so `eta = 4`, inside the
+    /// documented 1..=10, had no profile. F_dr must stay in (0, 1), rise with eta and be
+    /// continuous, and agree with the exact integral where the polynomial is used.
+    #[test]
+    fn diffuse_fresnel_stays_below_one_over_the_whole_eta_range() {
+        // The exact integral against known values: 0.4445 at 1.3 (Jensen's fit gives 0.4448).
+        assert!((fresnel_diffuse_reflectance_exact(1.3) - 0.44446).abs() < 1e-4);
+        assert!(fresnel_diffuse_reflectance_exact(1.0).abs() < 1e-9);
+        let mut last = fresnel_diffuse_reflectance(1.0);
+        for k in 1..=9000 {
+            let eta = 1.0 + k as f64 * 1e-3;
+            let f = fresnel_diffuse_reflectance(eta);
+            assert!(f > last - 1e-12 && f < 1.0, "eta {eta}: F_dr {f}");
+            assert!(f - last < 3e-3, "eta {eta}: jump from {last} to {f}");
+            if eta <= FDR_POLYNOMIAL_MAX_ETA {
+                let e = fresnel_diffuse_reflectance_exact(eta);
+                assert!((f - e).abs() < 2e-3, "eta {eta}: {f} vs exact {e}");
+            }
+            last = f;
+        }
+        for eta in [4.0, 10.0] {
+            let d = Dipole::new([0.01, 0.02, 0.05], [1.0, 1.2, 1.5], eta).unwrap();
+            assert!(d.boundary_a() > 1.0, "eta {eta}");
+            let r = d.energy_radius_mm(0.999);
+            assert!(r.is_finite() && r > 0.0, "eta {eta}: radius {r}");
+            for c in 0..3 {
+                let ch = d.channel(c);
+                assert!(ch.z_v > ch.z_r, "eta {eta}");
+            }
+            assert!(d.total_reflectance().iter().all(|&x| x > 0.0 && x < 1.0));
+        }
     }
 
     #[test]

@@ -21,6 +21,7 @@
 
 mod dipole;
 mod error;
+pub mod exact_array;
 mod fit;
 mod gaussian;
 mod kernel;

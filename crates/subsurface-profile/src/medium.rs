@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dipole::Dipole;
 use crate::error::{CHANNELS, Result, positive};
+use crate::exact_array::exact;
 use crate::materials::{JENSEN2001_ETA, Material, material};
 
 /// `medium = "skin1"` or `medium = { sigma_a = [..], sigma_s = [..], eta = 1.3 }` in a scene.
@@ -26,8 +27,10 @@ pub enum Medium {
 #[serde(deny_unknown_fields)]
 pub struct Coefficients {
     /// Absorption coefficient sigma_a, 1/mm, each > 0.
+    #[serde(deserialize_with = "exact")]
     pub sigma_a: [f64; 3],
     /// Reduced scattering coefficient sigma_s' = sigma_s (1 - g), 1/mm, each > 0.
+    #[serde(deserialize_with = "exact")]
     pub sigma_s: [f64; 3],
     /// Relative index of refraction of the boundary, in 1..=10 (default 1.3, Jensen 2001's).
     #[serde(default = "default_eta")]
@@ -56,6 +59,52 @@ impl<'de> Deserialize<'de> for Medium {
                 )
             })
     }
+}
+
+/// The coefficients a medium may have, per mm: past them the profile's arithmetic overflows
+/// (`sigma_a = 1e300` gave "profile: must be finite (got NaN)") or its radius does. Every
+/// measured material lies well inside: water's absorption is 1e-5/mm, skin's scattering 1-3/mm.
+pub const SIGMA_RANGE_PER_MM: (f64, f64) = (1e-8, 1e8);
+
+/// The largest ratio between the channels' diffusion lengths `1 / sigma_tr`: one fit of six
+/// Gaussians (and one kernel) covers all three channels over the widest one's radius, so a
+/// channel far narrower falls inside the narrowest Gaussian and its profile vanished
+/// ("kernel sum.g (profile vanishes)"). Ratios of 2e7 still rendered, 2e9 did not.
+pub const MAX_CHANNEL_SPREAD: f64 = 1e6;
+
+/// Rejects coefficients whose channels' diffusion lengths are more than
+/// [`MAX_CHANNEL_SPREAD`] apart, naming the coefficient (`sigma_a` or `sigma_s`) that differs
+/// more between the widest and the narrowest channel.
+fn check_channel_spread(c: &Coefficients) -> Result<()> {
+    let length = |ch: usize| 1.0 / (3.0 * c.sigma_a[ch] * (c.sigma_a[ch] + c.sigma_s[ch])).sqrt();
+    let (wide, narrow) = (0..3).fold((0, 0), |(w, n), ch| {
+        (
+            if length(ch) > length(w) { ch } else { w },
+            if length(ch) < length(n) { ch } else { n },
+        )
+    });
+    let spread = length(wide) / length(narrow);
+    if spread <= MAX_CHANNEL_SPREAD {
+        return Ok(());
+    }
+    let ratio = |v: [f64; 3]| (v[wide] / v[narrow]).max(v[narrow] / v[wide]);
+    let name = if ratio(c.sigma_a) >= ratio(c.sigma_s) {
+        "sigma_a"
+    } else {
+        "sigma_s"
+    };
+    Err(crate::ProfileError::Invalid {
+        field: name.into(),
+        reason: format!(
+            "the channels' diffusion lengths 1/sqrt(3 sigma_a (sigma_a + sigma_s)) are {:.3e} mm \
+             ({}) and {:.3e} mm ({}), {spread:.1e} times apart: at most {MAX_CHANNEL_SPREAD:e} \
+             is supported (one fit covers all three channels)",
+            length(wide),
+            CHANNELS[wide],
+            length(narrow),
+            CHANNELS[narrow]
+        ),
+    })
 }
 
 fn default_eta() -> f64 {
@@ -92,9 +141,19 @@ impl Medium {
             Medium::Coefficients(c) => {
                 // The scene's names (sigma_s, not the dipole's sigma_s_prime) in the errors.
                 for ch in 0..3 {
-                    positive(&format!("sigma_a.{}", CHANNELS[ch]), c.sigma_a[ch])?;
-                    positive(&format!("sigma_s.{}", CHANNELS[ch]), c.sigma_s[ch])?;
+                    for (name, v) in [("sigma_a", c.sigma_a[ch]), ("sigma_s", c.sigma_s[ch])] {
+                        let field = format!("{name}.{}", CHANNELS[ch]);
+                        positive(&field, v)?;
+                        let (lo, hi) = SIGMA_RANGE_PER_MM;
+                        if !(lo..=hi).contains(&v) {
+                            return Err(crate::ProfileError::Invalid {
+                                field,
+                                reason: format!("must be in {lo:e}..={hi:e} per mm (got {v:e})"),
+                            });
+                        }
+                    }
                 }
+                check_channel_spread(c)?;
                 Ok(Material::Dipole {
                     name: self.to_string(),
                     dipole: Dipole::new(c.sigma_a, c.sigma_s, c.eta)?,
@@ -193,5 +252,37 @@ mod tests {
                 .to_string()
                 .contains("skin1")
         );
+    }
+
+    /// Extreme media are errors naming the coefficient, in the scene's words, never an
+    /// internal quantity ("kernel sum.b", "profile: must be finite (got NaN)").
+    #[test]
+    fn extreme_coefficients_name_the_coefficient() {
+        let coeffs = |sigma_a: [f64; 3], sigma_s: [f64; 3]| {
+            Medium::Coefficients(Coefficients {
+                sigma_a,
+                sigma_s,
+                eta: 1.3,
+            })
+            .material()
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+        };
+        let e = coeffs([1e300, 0.02, 0.05], [1.0; 3]).unwrap_err();
+        assert_eq!(e, "sigma_a.r: must be in 1e-8..=1e8 per mm (got 1e300)");
+        let e = coeffs([0.01; 3], [1.0, 1e-40, 1.0]).unwrap_err();
+        assert!(e.starts_with("sigma_s.g: must be in"), "{e}");
+        let e = coeffs([1e-8, 100.0, 100.0], [1.0; 3]).unwrap_err();
+        assert!(
+            e.starts_with("sigma_a: the channels' diffusion lengths"),
+            "{e}"
+        );
+        assert!(e.contains("(r)") && e.contains("(g)"), "{e}");
+        let e = coeffs([1e-6; 3], [1e-8, 1.0, 1e8]).unwrap_err();
+        assert!(e.starts_with("sigma_s: the channels'"), "{e}");
+        // Wide but supported media still are.
+        coeffs([1e-4, 0.1, 0.1], [1e-4, 1.0, 1.0]).unwrap();
+        coeffs([1e-8; 3], [1e-8; 3]).unwrap();
+        coeffs([1e8; 3], [1e8; 3]).unwrap();
     }
 }

@@ -92,6 +92,7 @@ fn upload_texture(
     image: Option<&image::RgbaImage>,
     format: wgpu::TextureFormat,
     label: &str,
+    source: &str,
 ) -> Result<wgpu::TextureView, RenderError> {
     let white = image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]));
     let base = image.unwrap_or(&white);
@@ -100,7 +101,7 @@ fn upload_texture(
         return Err(RenderError::invalid(
             label,
             format!(
-                "texture is {}x{}, larger than this device's limit {max}",
+                "{source} is {}x{}, larger than this device's limit {max}",
                 base.width(),
                 base.height()
             ),
@@ -196,6 +197,10 @@ pub fn upload_objects(
             continue;
         }
         let label = format!("objects[{i}]");
+        let desc_mesh = match scene.desc.objects.get(i).map(|d| &d.mesh) {
+            Some(crate::scene::MeshDesc::Gltf { path }) => Some(path.clone()),
+            _ => None,
+        };
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&label),
             contents: bytemuck::cast_slice(&object.mesh.vertices),
@@ -225,23 +230,34 @@ pub fn upload_objects(
             }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
+        let m = &object.material;
+        // The file a texture came from, for the message: the material's own path, else the
+        // glTF that embeds it.
+        let source = |own: &Option<String>, what: &str| match (own, &desc_mesh) {
+            (Some(p), _) => format!("texture {p}"),
+            (None, Some(g)) => format!("the {what} texture of {g}"),
+            (None, None) => "the texture".to_string(),
+        };
         let albedo = upload_texture(
             ctx,
             object.albedo_texture.as_ref(),
             wgpu::TextureFormat::Rgba8UnormSrgb,
             &format!("{label}.material.albedo_texture"),
+            &source(&m.albedo_texture, "base colour"),
         )?;
         let normal = upload_texture(
             ctx,
             object.normal_texture.as_ref(),
             wgpu::TextureFormat::Rgba8Unorm,
             &format!("{label}.material.normal_texture"),
+            &source(&m.normal_texture, "normal"),
         )?;
         let specular = upload_texture(
             ctx,
             object.specular_texture.as_ref(),
             wgpu::TextureFormat::Rgba8Unorm,
             &format!("{label}.material.specular_texture"),
+            &source(&m.specular_texture, "specular"),
         )?;
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&label),

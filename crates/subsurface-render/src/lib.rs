@@ -9,6 +9,7 @@ pub mod error;
 pub mod frame_plan;
 pub mod gpu;
 pub mod gpu_scene;
+pub mod input;
 pub mod lights;
 pub mod material;
 pub mod mesh;

@@ -63,6 +63,11 @@ const EXTREMES: &[&str] = &[
     "-4294967296",
     "99999999999999999999",
     "1e308",
+    "1e39",
+    "1e-40",
+    "1e300",
+    "3e38",
+    "0, 0, nan",
     "\"x\"",
     "[]",
     "{}",
@@ -125,8 +130,16 @@ fn scene_seeds() -> Vec<(String, String)> {
         "default.toml".to_string(),
         subsurface_render::scene::DEFAULT_SCENE_TOML.to_string(),
     )];
-    for dir in ["scenes", "scenes/canonical", "scenes/experiments"] {
-        let mut files: Vec<_> = std::fs::read_dir(root.join(dir))
+    // The repository's scenes, and the crafted inputs of issue 41 (extra array elements,
+    // eta = 4, extreme media, +-3e38 geometry, nine lights) in fuzz-corpus/scenes.
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz-corpus/scenes");
+    for dir in [
+        root.join("scenes"),
+        root.join("scenes/canonical"),
+        root.join("scenes/experiments"),
+        corpus,
+    ] {
+        let mut files: Vec<_> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().path())
             .filter(|p| p.extension().is_some_and(|e| e == "toml"))

@@ -17,7 +17,7 @@ use clap::Args;
 use serde::{Deserialize, Serialize};
 use subsurface_render::{GpuContext, RenderOptions, Renderer};
 
-use crate::output::{PendingFile, is_stdout, print_summary};
+use crate::output::{PendingFile, is_stdout, png_bytes, print_summary};
 use crate::plot;
 use crate::settings_args::{SettingsArgs, load_scene};
 
@@ -142,7 +142,10 @@ pub struct Report {
 // ---------------------------------------------------------------- tone map (CPU)
 
 /// Hable's filmic curve as in `passes/tonemap.wgsl`.
-fn hable(x: f32) -> f32 {
+///
+/// In f64: a reference of 3e38 squared to infinity in f32, the curve gave inf / inf = NaN and
+/// the reference panel came out black.
+fn hable(x: f64) -> f64 {
     let (a, b, c, d, e, f) = (0.15, 0.50, 0.10, 0.20, 0.02, 0.30);
     ((x * (a * x + c * b) + d * e) / (x * (a * x + b) + d * f)) - e / f
 }
@@ -158,13 +161,13 @@ fn srgb_encode(x: f32) -> f32 {
 /// Exposure, Hable filmic (white 11.2, exposure bias 2) and the sRGB encode of the output
 /// target: the same 8-bit image `subsurface render` writes.
 pub fn tone_map(linear: &[[f32; 3]], exposure_ev: f32, w: u32, h: u32) -> image::RgbImage {
-    let k = exposure_ev.exp2();
+    let k = f64::from(exposure_ev.exp2());
     let white = hable(11.2);
     let px: Vec<u8> = linear
         .iter()
         .flat_map(|c| {
             c.map(|v| {
-                let m = (hable(2.0 * v.max(0.0) * k) / white).clamp(0.0, 1.0);
+                let m = (hable(2.0 * f64::from(v.max(0.0)) * k) / white).clamp(0.0, 1.0) as f32;
                 (srgb_encode(m) * 255.0).round() as u8
             })
         })
@@ -176,113 +179,16 @@ pub fn tone_map(linear: &[[f32; 3]], exposure_ev: f32, w: u32, h: u32) -> image:
 
 pub mod edge;
 pub mod flip;
+mod inputs;
 pub mod thickness;
+
+use inputs::read_reference;
+use inputs::{load_regions, read_stderr};
 
 // ---------------------------------------------------------------- comparison
 
 fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
-
-/// Reads a linear-radiance EXR (or any float image the `image` crate reads) as RGB.
-pub fn read_reference(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
-    let img = image::open(path)
-        .map_err(|e| {
-            anyhow::anyhow!(
-                "{}: cannot read the reference: {}",
-                path.display(),
-                crate_one_line(&e.to_string())
-            )
-        })?
-        .to_rgb32f();
-    let (w, h) = img.dimensions();
-    let px: Vec<[f32; 3]> = img.pixels().map(|p| p.0).collect();
-    if let Some(i) = px.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
-        anyhow::bail!(
-            "{}: pixel ({}, {}) is {:?}: the reference must be finite",
-            path.display(),
-            i % w as usize,
-            i / w as usize,
-            px[i]
-        );
-    }
-    Ok((w, h, px))
-}
-
-/// The standard-error image `tools/reference/render_reference.py` writes beside a reference
-/// (REF.stderr.exr for REF.exr), if there is one.
-pub fn stderr_path(reference: &Path) -> PathBuf {
-    let name = reference
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let stem = name
-        .strip_suffix(".exr")
-        .or_else(|| name.strip_suffix(".EXR"))
-        .unwrap_or(&name);
-    reference.with_file_name(format!("{stem}.stderr.exr"))
-}
-
-fn read_stderr(reference: &Path, w: u32, h: u32) -> Result<Option<Vec<[f32; 3]>>> {
-    let path = stderr_path(reference);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let (sw, sh, se) = read_reference(&path)?;
-    anyhow::ensure!(
-        (sw, sh) == (w, h),
-        "{}: {sw}x{sh}, but the reference is {w}x{h}",
-        path.display()
-    );
-    Ok(Some(se))
-}
-
-fn crate_one_line(s: &str) -> String {
-    s.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join("; ")
-}
-
-fn load_regions(args: &CompareArgs) -> Result<RegionsFile> {
-    let path = match (&args.regions, &args.scene) {
-        (Some(p), _) => p.clone(),
-        (None, Some(s)) => {
-            let p = s.with_extension("regions.json");
-            if !p.is_file() {
-                return Ok(RegionsFile::default());
-            }
-            p
-        }
-        (None, None) => return Ok(RegionsFile::default()),
-    };
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let f: RegionsFile =
-        serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let rects = f
-        .regions
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (format!("regions[{i}]"), r.rect));
-    if let Some(t) = &f.thickness {
-        anyhow::ensure!(
-            t.bin_mm > 0.0 && t.max_mm > t.bin_mm && t.max_mm / t.bin_mm <= 10_000.0,
-            "{}: thickness: bin_mm must be > 0 and max_mm above it (at most 10000 bins)",
-            path.display()
-        );
-    }
-    let rects = rects
-        .chain(f.edge.iter().map(|e| ("edge".into(), e.rect)))
-        .chain(f.thickness.iter().map(|t| ("thickness".into(), t.rect)));
-    for (name, [x0, y0, x1, y1]) in rects {
-        anyhow::ensure!(
-            [x0, y0, x1, y1].iter().all(|v| (0.0..=1.0).contains(v)) && x0 < x1 && y0 < y1,
-            "{}: {name}.rect: must be [x0, y0, x1, y1] in 0..=1 with x0 < x1, y0 < y1",
-            path.display()
-        );
-    }
-    Ok(f)
 }
 
 /// Hot colour map for the error image: black, red, yellow, white.
@@ -295,11 +201,14 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     // Check the inputs before the (slow) render and before creating the output.
     let (rw, rh, reference) = read_reference(&args.reference)?;
     let stderr = read_stderr(&args.reference, rw, rh)?;
-    let RegionsFile {
-        regions,
-        edge: edge_spec,
-        thickness: thickness_spec,
-    } = load_regions(args)?;
+    let (
+        regions_path,
+        RegionsFile {
+            regions,
+            edge: edge_spec,
+            thickness: thickness_spec,
+        },
+    ) = load_regions(args)?;
     let mut scene = load_scene(args.scene.as_ref(), None)?;
     args.settings.apply(&mut scene)?;
     let opts = RenderOptions::from_scene(&scene);
@@ -334,7 +243,7 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .as_deref()
         .map(PendingFile::create)
         .transpose()?;
-    let pending = PendingFile::create(&args.out)?;
+    let mut pending = PendingFile::create(&args.out)?;
     let ctx = GpuContext::new_headless()?;
     let (w, h) = (opts.width(), opts.height());
     let mut fine = opts.clone();
@@ -393,8 +302,12 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         .map(|v| f64::from(*v))
         .sum::<f64>()
         / (3 * n) as f64;
-    // Relative to the reference's mean, which must be positive to divide by.
-    let relative = |v: f64| (ref_mean > 0.0).then(|| (v / ref_mean) as f32);
+    // Relative to the reference's mean, which must be positive to divide by, and large enough
+    // for the quotient to be finite (a 1e-40 reference printed "inf% of mean").
+    let relative = |v: f64| {
+        let r = (v / ref_mean) as f32;
+        (ref_mean > 0.0 && r.is_finite()).then_some(r)
+    };
 
     // Region means, always starting with all skin pixels.
     let is_skin = |i: usize| skin[i][0] > 0.5;
@@ -428,24 +341,51 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             }
             let k = 1.0 / count.max(1) as f64;
             let (ma, mb) = (a.map(|v| (v * k) as f32), b.map(|v| (v * k) as f32));
-            let (ya, yb) = (luminance(ma), luminance(mb));
-            let defined = yb > 0.0;
+            let (ya, yb) = (f64::from(luminance(ma)), f64::from(luminance(mb)));
+            let rel = ((ya - yb) / yb) as f32;
+            // A near-black reference (1e-40) gave "+inf%": only a finite quotient is kept.
+            let defined = yb > 0.0 && rel.is_finite();
             RegionResult {
                 name: r.name,
                 pixels: count,
                 mean_realtime: ma,
                 mean_reference: mb,
-                rel_error: defined.then(|| (ya - yb) / yb),
+                rel_error: defined.then_some(rel),
                 rel_stderr: stderr
                     .as_ref()
                     .filter(|_| defined)
-                    .map(|_| (var_y.sqrt() * k / f64::from(yb)) as f32),
-                note: (!defined).then(|| BLACK_REFERENCE.to_string()),
+                    .map(|_| (var_y.sqrt() * k / yb) as f32)
+                    .filter(|v| v.is_finite()),
+                note: (!defined).then(|| {
+                    if yb > 0.0 {
+                        format!(
+                            "the reference is too dark here (mean luminance {yb:e}) for a \
+                             finite relative error"
+                        )
+                    } else {
+                        BLACK_REFERENCE.to_string()
+                    }
+                }),
             }
         })
         .collect();
-    if let Some(r) = region_results.iter().find(|r| r.pixels == 0) {
-        anyhow::bail!("region {:?}: no skin pixels in its rectangle", r.name);
+    if let Some(k) = region_results.iter().position(|r| r.pixels == 0) {
+        // Region 0 is the whole image's skin, the scene's; the others are the regions file's.
+        let scene_name = args
+            .scene
+            .as_ref()
+            .map_or("<default scene>".into(), |p| p.display().to_string());
+        match (k, &regions_path) {
+            (0, _) | (_, None) => {
+                anyhow::bail!("{scene_name}: no skin pixels in the render to compare")
+            }
+            (k, Some(p)) => anyhow::bail!(
+                "{}: regions[{}] {:?}: no skin pixels in its rectangle",
+                p.display(),
+                k - 1,
+                region_results[k].name
+            ),
+        }
     }
 
     let edge = edge_spec
@@ -496,7 +436,10 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             side.put_pixel(2 * w + x, y, image::Rgb(hot(err[(y * w + x) as usize])));
         }
     }
-    pending.write_png(&side)?;
+    // Every output is encoded and written before any is committed: `--linear /dev/full`
+    // failed after out.png was already in place.
+    pending.write_bytes(&png_bytes(&side, &args.out)?)?;
+    let mut written = vec![pending];
     if let Some(mut file) = linear_file {
         let img = image::Rgb32FImage::from_raw(w, h, ours.iter().flatten().copied().collect())
             .expect("w * h pixels");
@@ -504,9 +447,9 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
         img.write_to(&mut bytes, image::ImageFormat::OpenExr)
             .context("--linear: EXR encoding failed")?;
         file.write_bytes(bytes.get_ref())?;
-        file.commit()?;
+        written.push(file);
     }
-    if let Some(file) = plot_file {
+    if let Some(mut file) = plot_file {
         let title = format!(
             "{}: {} + {}",
             args.scene
@@ -525,7 +468,13 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             (None, None) => Ok(()),
         })
         .context("--plot")?;
-        file.write_png(&img).context("--plot")?;
+        let bytes =
+            png_bytes(&img, args.plot.as_deref().unwrap_or(Path::new("-"))).context("--plot")?;
+        file.write_bytes(&bytes).context("--plot")?;
+        written.push(file);
+    }
+    for file in written {
+        file.commit()?;
     }
 
     Ok(Report {

@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use subsurface_render::scene::{BUILTIN_HAND, MeshDesc, SceneDesc};
 use subsurface_render::settings::InvalidSetting;
 use subsurface_render::{
@@ -222,7 +222,11 @@ impl ViewerState {
     /// Reads a scene file saved by the viewer (or any scene file).
     pub fn load(path: &Path) -> Result<Self> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).with_context(|| format!("{name}: cannot read"))?;
+        let text = subsurface_render::input::read_regular_text(
+            path,
+            subsurface_render::input::MAX_TEXT_BYTES,
+        )
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
         let base = path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())

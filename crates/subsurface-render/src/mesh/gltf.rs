@@ -69,18 +69,8 @@ pub fn load_gltf(path: &Path) -> Result<GltfModel, SceneError> {
         file: name.clone(),
         msg: one_line(&msg),
     };
-    let meta = std::fs::metadata(path).map_err(|e| io_err(e.to_string()))?;
     // A FIFO or device would block or never end; a huge file cannot be a mesh we accept.
-    if !meta.is_file() {
-        return Err(io_err("not a regular file".into()));
-    }
-    if meta.len() > MAX_BUFFER_BYTES {
-        return Err(io_err(format!(
-            "{} bytes, more than the limit of {MAX_BUFFER_BYTES}",
-            meta.len()
-        )));
-    }
-    let bytes = std::fs::read(path).map_err(|e| io_err(e.to_string()))?;
+    let bytes = crate::input::read_regular(path, MAX_BUFFER_BYTES).map_err(io_err)?;
     load_gltf_impl(&bytes, &name, path.parent())
 }
 
@@ -179,7 +169,11 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
     let buffers = gltf::import_buffers(&document, base, blob).map_err(|e| gltf_err(name, e))?;
     check::check_node_cycles(&document).map_err(err)?;
     let instances = scene_instances(&document).map_err(err)?;
-    let (parts, total_v, total_i) = plan(&document, &buffers, &instances, name).map_err(err)?;
+    // Warnings are printed only when the file loads: a file that fails printed a WARN line
+    // before its one `error:` line (a glTF of points only).
+    let mut warnings = Vec::new();
+    let (parts, total_v, total_i) =
+        plan(&document, &buffers, &instances, name, &mut warnings).map_err(err)?;
 
     // World transform of each node's first instance, for skin joints.
     let mut first_world: Vec<Option<Mat4>> = vec![None; document.as_json().nodes.len()];
@@ -227,7 +221,7 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
                 .collect()
         });
         let (part_mesh, has_tangents, d) =
-            read_part(part, &buffers, skin_mats.as_deref(), name).map_err(err)?;
+            read_part(part, &buffers, skin_mats.as_deref(), name, &mut warnings).map_err(err)?;
         all_have_tangents &= has_tangents;
         dropped += d;
         let tris = part_mesh.triangle_count();
@@ -237,7 +231,17 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
         mesh.append(&part_mesh);
     }
     if mesh.vertices.is_empty() {
-        return Err(err("no triangle mesh in the default scene".into()));
+        // Say why (e.g. only points or lines), in the error rather than a WARN line before it.
+        let why = warnings
+            .iter()
+            .map(|w| w.strip_prefix(&format!("{name}: ")).unwrap_or(w))
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(err(if why.is_empty() {
+            "no triangle mesh in the default scene".into()
+        } else {
+            format!("no triangle mesh in the default scene ({why})")
+        }));
     }
     let (lo, hi) = mesh.bounds();
     if (hi - lo).max_element() <= 0.0 {
@@ -246,11 +250,21 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
             mesh.vertices.len()
         )));
     }
+    // Corners of +-3e38 are finite, but the extent between them is not: such a model
+    // rendered nothing, with exit 0.
+    if !(hi - lo).is_finite() {
+        return Err(err(format!(
+            "the model's extent overflows 32-bit floats: its vertices span {} to {} after \
+             node transforms",
+            crate::scene::sci(lo),
+            crate::scene::sci(hi)
+        )));
+    }
     if mesh.indices.is_empty() {
         return Err(err(format!("all {dropped} triangles have zero area")));
     }
     if dropped > 0 {
-        log::warn!("{name}: dropped {dropped} zero-area triangle(s)");
+        warnings.push(format!("{name}: dropped {dropped} zero-area triangle(s)"));
     }
     if !all_have_tangents {
         mesh.generate_tangents();
@@ -273,6 +287,9 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
         let nt = mat.normal_texture().map(|t| t.texture().source().index());
         model.base_color_texture = load_image(&document, bc, &buffers, base, name)?;
         model.normal_texture = load_image(&document, nt, &buffers, base, name)?;
+    }
+    for w in warnings {
+        log::warn!("{w}");
     }
     Ok(model)
 }

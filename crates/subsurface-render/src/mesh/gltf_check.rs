@@ -120,18 +120,8 @@ pub(super) fn check_uri(uri: &str, base: Option<&Path>, what: &str) -> Result<()
             "{what}: refers to an external file, which an in-memory glTF cannot"
         ));
     }
-    let meta = std::fs::metadata(&path)
+    crate::input::check_regular(&path, MAX_BUFFER_BYTES)
         .map_err(|e| format!("{what}: cannot read {}: {e}", path.display()))?;
-    if !meta.is_file() {
-        return Err(format!("{what}: {} is not a regular file", path.display()));
-    }
-    if meta.len() > MAX_BUFFER_BYTES {
-        return Err(format!(
-            "{what}: {} has {} bytes, more than the limit of {MAX_BUFFER_BYTES}",
-            path.display(),
-            meta.len()
-        ));
-    }
     Ok(())
 }
 

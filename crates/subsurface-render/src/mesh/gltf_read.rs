@@ -31,6 +31,7 @@ pub(super) fn plan<'a>(
     buffers: &[gltf::buffer::Data],
     instances: &[Instance],
     name: &str,
+    warnings: &mut Vec<String>,
 ) -> Result<(Vec<Part<'a>>, usize, usize), String> {
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut parts = Vec::new();
@@ -153,7 +154,9 @@ pub(super) fn plan<'a>(
         }
     }
     if non_triangle > 0 {
-        log::warn!("{name}: skipped {non_triangle} non-triangle primitive(s)");
+        warnings.push(format!(
+            "{name}: skipped {non_triangle} non-triangle primitive(s)"
+        ));
     }
     Ok((parts, total_v, total_i))
 }
@@ -173,6 +176,7 @@ pub(super) fn read_part(
     buffers: &[gltf::buffer::Data],
     skin_mats: Option<&[Mat4]>,
     name: &str,
+    warnings: &mut Vec<String>,
 ) -> Result<(Mesh, bool, usize), String> {
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
     let (what, n) = (&part.what, part.vertices);
@@ -193,7 +197,9 @@ pub(super) fn read_part(
     }
     let mut normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(|i| i.collect());
     if normals.as_deref().and_then(first_non_finite).is_some() {
-        log::warn!("{name}: {what}: non-finite normals; recomputing them");
+        warnings.push(format!(
+            "{name}: {what}: non-finite normals; recomputing them"
+        ));
         normals = None;
     }
     let uvs: Vec<[f32; 2]> = reader
@@ -208,7 +214,9 @@ pub(super) fn read_part(
     }
     let mut tangents: Option<Vec<[f32; 4]>> = reader.read_tangents().map(|i| i.collect());
     if tangents.as_deref().and_then(first_non_finite).is_some() {
-        log::warn!("{name}: {what}: non-finite tangents; regenerating them");
+        warnings.push(format!(
+            "{name}: {what}: non-finite tangents; regenerating them"
+        ));
         tangents = None;
     }
     if normals.as_ref().is_some_and(|v| v.len() != n)

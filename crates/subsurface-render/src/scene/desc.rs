@@ -3,6 +3,7 @@
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use subsurface_profile::exact_array::{exact, exact_opt};
 use subsurface_profile::{DEFAULT_FALLOFF, DEFAULT_STRENGTH, Medium};
 
 use crate::settings::RenderSettings;
@@ -65,9 +66,11 @@ pub struct SceneDesc {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
+    #[serde(deserialize_with = "exact")]
     pub target: [f32; 3],
-    #[serde(default = "d_up")]
+    #[serde(deserialize_with = "exact", default = "d_up")]
     pub up: [f32; 3],
     /// Vertical field of view in degrees, 0 < fov < 180.
     #[serde(default = "d_fov")]
@@ -104,11 +107,12 @@ pub enum LightKind {
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     pub kind: LightKind,
+    #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
     /// Spot and directional: direction = target - position. Unused by point lights.
-    #[serde(default = "d_zero3")]
+    #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub target: [f32; 3],
-    #[serde(default = "d_white")]
+    #[serde(deserialize_with = "exact", default = "d_white")]
     pub color: [f32; 3],
     /// Point/spot: radiant intensity (falls off as 1/d^2 in scene units);
     /// directional: irradiance.
@@ -154,10 +158,10 @@ pub struct ObjectDesc {
     /// 1000 for metres (glTF), ~48 for the Lee Perry-Smith head.
     #[serde(default = "d_mm_per_unit")]
     pub mm_per_unit: f32,
-    #[serde(default = "d_zero3")]
+    #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub translation: [f32; 3],
     /// Euler angles in degrees, `glam::EulerRot::XYZ`: R = Rx * Ry * Rz.
-    #[serde(default = "d_zero3")]
+    #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub rotation_deg: [f32; 3],
     /// Uniform scale.
     #[serde(default = "d_one")]
@@ -407,6 +411,7 @@ impl From<MeshDesc> for MeshDescToml {
 pub struct MaterialDesc {
     /// Linear RGB; multiplies the albedo texture and (if `use_gltf_color`)
     /// the glTF base colour factor.
+    #[serde(deserialize_with = "exact")]
     pub albedo: [f32; 3],
     /// sRGB colour texture, path relative to the scene file (overrides the glTF's).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -447,11 +452,19 @@ pub struct MaterialDesc {
     /// Separable kernel: per-channel share of the light that scatters, each in [0, 1].
     /// Unset: Jimenez's skin values (0.48, 0.41, 0.28) for the `skin` preset, 1 for a
     /// measured material (its fitted profile already holds the colour's spread).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "exact_opt",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub kernel_strength: Option<[f32; 3]>,
     /// Separable kernel: per-channel falloff, each in [0, 1] (smaller = narrower in that
     /// channel). Unset: (1, 0.37, 0.3) for `skin`, 1 for a measured material.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "exact_opt",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub falloff: Option<[f32; 3]>,
 }
 

@@ -78,14 +78,25 @@ pub(crate) fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
 /// Reads and decodes an image file as RGBA8.
 pub fn load_image(path: &Path) -> Result<image::RgbaImage, SceneError> {
     let file = path.display().to_string();
-    let reader = image::ImageReader::open(path).map_err(|e| SceneError::Io {
-        file: file.clone(),
-        msg: one_line(&e.to_string()),
+    // Only a regular file, read with a bound: a FIFO as a texture blocked forever.
+    let bytes = crate::input::read_regular(path, crate::input::MAX_IMAGE_BYTES).map_err(|e| {
+        SceneError::Io {
+            file: file.clone(),
+            msg: one_line(&e),
+        }
     })?;
-    let reader = reader.with_guessed_format().map_err(|e| SceneError::Io {
-        file: file.clone(),
-        msg: one_line(&e.to_string()),
-    })?;
+    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| SceneError::Io {
+            file: file.clone(),
+            msg: one_line(&e.to_string()),
+        })?;
+    if reader.format() == Some(image::ImageFormat::Jpeg) && !jpeg_is_complete(&bytes) {
+        return Err(SceneError::Image {
+            file,
+            msg: "the JPEG is truncated (no end-of-image marker after its last scan)".into(),
+        });
+    }
     let img = reader.decode().map_err(|e| SceneError::Image {
         file,
         msg: one_line(&e.to_string()),
@@ -105,6 +116,14 @@ pub fn asset_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
         return Path::new(&assets).join(&path[at + SHARED.len()..]);
     }
     base_dir.join(path)
+}
+
+/// Whether a JPEG's last scan (start-of-scan marker FF DA) is followed by the end-of-image
+/// marker FF D9: the decoder fills a truncated file's missing rows with grey without a word.
+/// (Inside a scan FF is always followed by 00 or a restart marker, so FF D9 ends it.)
+fn jpeg_is_complete(bytes: &[u8]) -> bool {
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    last_scan.is_some_and(|s| bytes[s..].windows(2).any(|w| w == [0xFF, 0xD9]))
 }
 
 fn load_object(
@@ -218,36 +237,55 @@ fn load_object(
     Ok(object)
 }
 
-/// The object in world space must fit in f32: a mesh extent times `scale` (or plus
-/// `translation`) past f32::MAX rendered nothing and exported infinite vertices, with exit 0.
+/// The object in world space must fit in f32, extent included: a mesh extent times `scale`
+/// (or plus `translation`) past f32::MAX rendered nothing and exported infinite vertices, with
+/// exit 0, and so did a mesh from -3e38 to 3e38, whose corners are finite but whose extent is
+/// not.
 fn check_world_extent(
     object: &Object,
     o: &ObjectDesc,
     index: usize,
     file: &str,
 ) -> Result<(), SceneError> {
-    let (lo, hi) = object.world_bounds();
-    if lo.is_finite() && hi.is_finite() {
+    let fits = |(lo, hi): (Vec3, Vec3)| lo.is_finite() && hi.is_finite() && (hi - lo).is_finite();
+    if fits(object.world_bounds()) {
         return Ok(());
     }
     let (mlo, mhi) = object.mesh.bounds();
     let extent = (mhi - mlo).max_element() * o.scale;
-    let (field, msg) = if extent.is_finite() {
+    let (field, msg) = if !fits((mlo, mhi)) {
         (
-            "translation",
-            "the object's world-space bounds overflow 32-bit floats",
+            match &o.mesh {
+                MeshDesc::Gltf { .. } => "mesh.gltf".to_string(),
+                m => format!("mesh.{}", m.sizes().first().map_or("size", |s| s.0)),
+            },
+            format!(
+                "the mesh's extent ({} to {}) overflows 32-bit floats",
+                sci(mlo),
+                sci(mhi)
+            ),
+        )
+    } else if extent.is_finite() {
+        (
+            "translation".to_string(),
+            "the object's world-space bounds overflow 32-bit floats".to_string(),
         )
     } else {
         (
-            "scale",
-            "the mesh's extent times the scale overflows 32-bit floats",
+            "scale".to_string(),
+            "the mesh's extent times the scale overflows 32-bit floats".to_string(),
         )
     };
     Err(SceneError::Invalid {
         file: file.to_string(),
         field: format!("objects[{index}].{field}"),
-        msg: msg.to_string(),
+        msg,
     })
+}
+
+/// A point with its coordinates in exponent form: `[-3e38, 0e0, 1.5e-2]`.
+pub(crate) fn sci(v: Vec3) -> String {
+    format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z)
 }
 
 fn union(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> (Vec3, Vec3) {
@@ -259,10 +297,13 @@ impl Scene {
     /// resolved against the file's directory.
     pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
-            file: name.clone(),
-            msg: one_line(&e.to_string()),
-        })?;
+        let text =
+            crate::input::read_regular_text(path, crate::input::MAX_TEXT_BYTES).map_err(|e| {
+                SceneError::Io {
+                    file: name.clone(),
+                    msg: one_line(&e),
+                }
+            })?;
         let desc = SceneDesc::from_toml_str(&text, &name)?;
         let base = path
             .parent()

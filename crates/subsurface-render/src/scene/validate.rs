@@ -17,6 +17,35 @@ fn line_col(s: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// A TOML error as a [`SceneError::Toml`] naming the file, `line:col` and the key path.
+fn toml_error(s: &str, file: &str, mut e: toml::de::Error) -> SceneError {
+    let line_col = e.span().map(|sp| line_col(s, sp.start));
+    let msg = one_line(e.message());
+    // Without its input, toml's Display appends "in `a.b.c`" (the key path).
+    e.set_input(None);
+    let keys = e.to_string().lines().rev().find_map(|l| {
+        l.strip_prefix("in `")?
+            .strip_suffix('`')
+            .map(str::to_string)
+    });
+    SceneError::Toml {
+        file: file.to_string(),
+        line_col,
+        msg: match keys {
+            Some(k) if !k.is_empty() => format!("{k}: {msg}"),
+            _ => msg,
+        },
+    }
+}
+
+/// A 32-bit field written as `1e39` reads as infinity: "(got inf)" said nothing of what was
+/// written, so an infinite value is explained as the overflow it (almost always) is.
+pub(crate) fn explain_inf(msg: &str) -> String {
+    const OUT: &str = "out of the 32-bit float range, whose largest is 3.4e38";
+    msg.replace("(got inf)", &format!("(got inf: {OUT})"))
+        .replace("(got -inf)", &format!("(got -inf: {OUT})"))
+}
+
 /// The longest target - position a camera or light may have: its square must stay a finite
 /// f32 for the direction to normalise.
 const MAX_SPAN: f32 = 1.8e19;
@@ -38,9 +67,12 @@ impl Check<'_> {
         if x.is_finite() && ok {
             Ok(())
         } else if rule.is_empty() {
-            Err(self.err(field, format!("must be finite (got {x})")))
+            Err(self.err(field, explain_inf(&format!("must be finite (got {x})"))))
         } else {
-            Err(self.err(field, format!("must be finite and {rule} (got {x})")))
+            Err(self.err(
+                field,
+                explain_inf(&format!("must be finite and {rule} (got {x})")),
+            ))
         }
     }
     fn finite(&self, field: &str, x: f32) -> Result<(), SceneError> {
@@ -80,29 +112,23 @@ impl Check<'_> {
     }
 }
 
+/// A medium's error naming the coefficient in the scene's words:
+/// `objects[0].material.medium.sigma_a.r: must be ...`.
+fn medium_error(c: &Check, field: &str, e: &subsurface_profile::ProfileError) -> SceneError {
+    let e = e.to_string();
+    match e.split_once(": ") {
+        Some((coeff, msg)) if coeff.starts_with("sigma_") || coeff == "eta" => {
+            c.err(format!("{field}.{coeff}"), msg)
+        }
+        _ => c.err(field, e),
+    }
+}
+
 impl SceneDesc {
     /// Parses and validates a scene. `name_for_errors` names the file in errors.
     pub fn from_toml_str(s: &str, name_for_errors: &str) -> Result<Self, SceneError> {
-        let desc: SceneDesc = toml::from_str(s).map_err(|mut e| {
-            let line_col = e.span().map(|sp| line_col(s, sp.start));
-            let msg = one_line(e.message());
-            // Without its input, toml's Display appends "in `a.b.c`" (the key path).
-            e.set_input(None);
-            let keys = e.to_string().lines().rev().find_map(|l| {
-                l.strip_prefix("in `")?
-                    .strip_suffix('`')
-                    .map(str::to_string)
-            });
-            SceneError::Toml {
-                file: name_for_errors.to_string(),
-                line_col,
-                msg: match keys {
-                    Some(k) if !k.is_empty() => format!("{k}: {msg}"),
-                    _ => msg,
-                },
-            }
-        })?;
-        let mut desc = desc;
+        let toml_err = |e| toml_error(s, name_for_errors, e);
+        let mut desc: SceneDesc = toml::from_str(s).map_err(toml_err)?;
         desc.apply_render_keys(s, name_for_errors)?;
         desc.validate(name_for_errors)?;
         Ok(desc)
@@ -195,8 +221,18 @@ impl SceneDesc {
         // render
         self.render
             .validate()
-            .map_err(|e| c.err(format!("render.{}", e.field), e.message))?;
+            .map_err(|e| c.err(format!("render.{}", e.field), explain_inf(&e.message)))?;
         // lights
+        let max_lights = crate::uniforms::MAX_LIGHTS;
+        if self.lights.len() > max_lights {
+            return Err(c.err(
+                "lights",
+                format!(
+                    "at most {max_lights} lights are supported (got {})",
+                    self.lights.len()
+                ),
+            ));
+        }
         for (i, l) in self.lights.iter().enumerate() {
             let f = |k: &str| format!("lights[{i}].{k}");
             c.finite3(&f("position"), l.position)?;
@@ -304,7 +340,7 @@ impl SceneDesc {
             // validates also loads (unknown preset, coefficient <= 0 or NaN, bad eta).
             m.medium
                 .material()
-                .map_err(|e| c.err(f("medium"), e.to_string()))?;
+                .map_err(|e| medium_error(&c, &f("medium"), &e))?;
             if let Some(k) = m.kernel_strength {
                 c.unit3(&f("kernel_strength"), k)?;
             }

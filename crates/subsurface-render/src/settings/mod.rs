@@ -115,8 +115,10 @@ pub struct RenderSettings {
     /// Exposure in stops: radiance is multiplied by 2^ev before tone mapping.
     pub exposure_ev: f32,
     /// Uniform ambient radiance (linear RGB).
+    #[serde(deserialize_with = "subsurface_profile::exact_array::exact")]
     pub ambient: [f32; 3],
     /// Background colour (linear RGB).
+    #[serde(deserialize_with = "subsurface_profile::exact_array::exact")]
     pub background: [f32; 3],
     /// Subsurface scattering of the reflected light (`[render.sss]`).
     pub sss: SssSettings,

@@ -114,6 +114,7 @@ pub struct SssSettings {
     pub min_sigma_px: f32,
     /// Six Gaussians: which of the five blurred Gaussians (the narrowest is never blurred)
     /// are accumulated; switching one off shows its share of the profile.
+    #[serde(deserialize_with = "subsurface_profile::exact_array::exact")]
     pub gaussians: [bool; 5],
     /// Texture space: size of each object's UV-space maps in texels per side.
     pub texture_size: u32,
