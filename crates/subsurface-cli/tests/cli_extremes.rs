@@ -28,7 +28,7 @@ fn glb_quads(uvs: &[bool]) -> Vec<u8> {
             format!(r#"{{"attributes":{{"POSITION":0{t}}},"indices":1}}"#)
         })
         .collect();
-    let mut json = format!(
+    let json = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
         "meshes":[{{"primitives":[{}]}}],
         "buffers":[{{"byteLength":{}}}],
@@ -41,20 +41,7 @@ fn glb_quads(uvs: &[bool]) -> Vec<u8> {
         bin.len()
     )
     .into_bytes();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut glb = Vec::with_capacity(total);
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&(total as u32).to_le_bytes());
-    for (kind, data) in [(b"JSON", &json), (b"BIN\0", &bin)] {
-        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        glb.extend_from_slice(kind);
-        glb.extend_from_slice(data);
-    }
-    glb
+    common::glb(json, &bin)
 }
 
 /// A 32x24 scene: the camera 0.2 in front of (0.025, 0.025, 0), a spot light beside it aimed

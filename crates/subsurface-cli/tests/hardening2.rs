@@ -204,7 +204,7 @@ fn glb_quad(h: f32, instances: usize, mode: u32) -> Vec<u8> {
     bin.extend([0u8; 4]);
     let nodes = vec![r#"{"mesh":0}"#; instances].join(",");
     let roots: Vec<String> = (0..instances).map(|i| i.to_string()).collect();
-    let mut json = format!(
+    let json = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[{}]}}],"nodes":[{nodes}],
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"mode":{mode}}}]}}],
         "buffers":[{{"byteLength":{}}}],
@@ -219,20 +219,7 @@ fn glb_quad(h: f32, instances: usize, mode: u32) -> Vec<u8> {
         h
     )
     .into_bytes();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut glb = Vec::with_capacity(total);
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&(total as u32).to_le_bytes());
-    for (kind, data) in [(b"JSON", &json), (b"BIN\0", &bin)] {
-        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        glb.extend_from_slice(kind);
-        glb.extend_from_slice(data);
-    }
-    glb
+    common::glb(json, &bin)
 }
 
 /// Item 4: corners at +-3e38 are finite but the extent is not; such a model rendered nothing

@@ -409,12 +409,13 @@ impl Model {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::path::PathBuf;
     use subsurface_render::scene::DEFAULT_SCENE_TOML;
 
-    fn model() -> Model {
+    /// A model of the default scene, without a window.
+    pub(crate) fn model() -> Model {
         let state =
             ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
         Model::new(state, Scene::default_scene(), None)

@@ -182,16 +182,8 @@ pub struct Rejected {
 mod tests {
     use super::*;
     use crate::view::model::Model;
-    use crate::view::state::{ViewerState, per_side};
-    use std::path::PathBuf;
-    use subsurface_render::Scene;
-    use subsurface_render::scene::DEFAULT_SCENE_TOML;
-
-    fn model() -> Model {
-        let state =
-            ViewerState::from_toml_str(DEFAULT_SCENE_TOML, PathBuf::from("."), "default").unwrap();
-        Model::new(state, Scene::default_scene(), None)
-    }
+    use crate::view::model::tests::model;
+    use crate::view::state::per_side;
 
     fn value(m: &Model, which: Which, key: &str) -> Value {
         Value::entries(&m.state.settings(which))

@@ -113,3 +113,22 @@ pub fn run_with_gpu(name: &str, args: &[&str]) -> Option<(PathBuf, Output)> {
     assert_success(&out);
     Some((dir, out))
 }
+
+/// A GLB file of `json` (padded to 4 bytes here) and the binary chunk `bin`.
+#[allow(dead_code)]
+pub fn glb(mut json: Vec<u8>, bin: &[u8]) -> Vec<u8> {
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    for (kind, data) in [(b"JSON", json.as_slice()), (b"BIN\0", bin)] {
+        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        glb.extend_from_slice(kind);
+        glb.extend_from_slice(data);
+    }
+    glb
+}

@@ -535,9 +535,11 @@ impl SceneDesc {
         &mut self,
         quality: crate::settings::Quality,
     ) -> Result<(), crate::settings::InvalidSetting> {
+        // Unchecked: the ranges are left to the caller's `validate`, so that the error names
+        // the key that is out of them.
         self.render.apply_quality(quality);
         for (key, value) in &self.render_keys.0 {
-            self.render.set(key, value)?;
+            self.render.set_unchecked(key, value)?;
         }
         Ok(())
     }
