@@ -117,7 +117,7 @@ pub fn run_with_gpu(name: &str, args: &[&str]) -> Option<(PathBuf, Output)> {
 /// A GLB file of `json` (padded to 4 bytes here) and the binary chunk `bin`.
 #[allow(dead_code)]
 pub fn glb(mut json: Vec<u8>, bin: &[u8]) -> Vec<u8> {
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
