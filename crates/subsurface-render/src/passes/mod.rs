@@ -8,11 +8,13 @@ pub mod lighting;
 pub mod maps;
 pub mod overrides;
 pub mod shadow;
+pub mod shadow_entry;
 pub mod sss;
 pub mod texture_space;
 pub mod tonemap;
 pub mod traffic;
 pub mod transmittance;
+pub mod transmitted_light;
 pub mod tsm;
 pub mod util;
 
@@ -33,4 +35,9 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ),
     ("texture_space/blur.wgsl", texture_space::blur::SHADER),
     ("tsm/tsm.wgsl", tsm::SHADER),
+    ("shadow_entry/shadow_entry.wgsl", shadow_entry::SHADER),
+    (
+        "transmitted_light/transmitted_light.wgsl",
+        transmitted_light::SHADER,
+    ),
 ];

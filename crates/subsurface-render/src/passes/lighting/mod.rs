@@ -87,6 +87,48 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// Group 0 of the lighting shader's pipelines ([`frame_layout`]): the camera and lights
+/// uniforms (`CameraUniform`, `LightsUniform`), the shadow maps and the translucent shadow maps
+/// (`Rg32Float` array; [`maps::dummy_tsm_view`] where none are drawn). Other renderers bind it
+/// to [`crate::passes::transmitted_light::TransmittedLightPass`].
+pub fn frame_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    [camera, lights]: [&wgpu::Buffer; 2],
+    shadow: ShadowMaps<'_>,
+    tsm_atlas: &wgpu::TextureView,
+) -> wgpu::BindGroup {
+    let shadow_compare = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("shadow compare"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        // Lit where the receiver's biased depth is at most the occluder's.
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let no_flux = crate::passes::bounce::dummy_views(device);
+    let flux = shadow
+        .flux
+        .unwrap_or([&no_flux[0], &no_flux[1], &no_flux[2]]);
+    let view = wgpu::BindingResource::TextureView;
+    util::bind_group(
+        device,
+        "lighting frame",
+        layout,
+        [
+            (0, camera.as_entire_binding()),
+            (1, lights.as_entire_binding()),
+            (2, view(shadow.atlas)),
+            (3, view(tsm_atlas)),
+            (4, view(shadow.depth)),
+            (5, wgpu::BindingResource::Sampler(&shadow_compare)),
+            (6, view(flux[0])),
+            (7, view(flux[1])),
+            (8, view(flux[2])),
+        ],
+    )
+}
+
 /// The shadow maps the lighting pass reads ([`crate::passes::shadow::ShadowPass::maps`]).
 #[derive(Clone, Copy)]
 pub struct ShadowMaps<'a> {
@@ -191,18 +233,6 @@ impl LightingPass {
     ) -> Self {
         let [object_layout, maps_layout] = layouts;
         let device = &ctx.device;
-        let shadow_compare = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("shadow compare"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            // Lit where the receiver's biased depth is at most the occluder's.
-            compare: Some(wgpu::CompareFunction::LessEqual),
-            ..Default::default()
-        });
-        let no_flux = crate::passes::bounce::dummy_views(device);
-        let flux = shadow
-            .flux
-            .unwrap_or([&no_flux[0], &no_flux[1], &no_flux[2]]);
         let module = util::wgsl_module(device, "lighting.wgsl", SHADER);
         let frame_layout = frame_layout(device);
         let buffer = |label, contents| {
@@ -214,23 +244,8 @@ impl LightingPass {
         };
         let camera = buffer("camera", bytemuck::bytes_of(camera));
         let lights = buffer("lights", bytemuck::bytes_of(lights));
-        let view = wgpu::BindingResource::TextureView;
-        let frame_bind_group = util::bind_group(
-            device,
-            "lighting frame",
-            &frame_layout,
-            [
-                (0, camera.as_entire_binding()),
-                (1, lights.as_entire_binding()),
-                (2, view(shadow.atlas)),
-                (3, view(tsm_atlas)),
-                (4, view(shadow.depth)),
-                (5, wgpu::BindingResource::Sampler(&shadow_compare)),
-                (6, view(flux[0])),
-                (7, view(flux[1])),
-                (8, view(flux[2])),
-            ],
-        );
+        let frame_bind_group =
+            frame_bind_group(device, &frame_layout, [&camera, &lights], shadow, tsm_atlas);
         let prepass_layout = util::pipeline_layout(
             device,
             "depth prepass",

@@ -1,0 +1,788 @@
+//! The skin passes in a renderer that is not ours.
+//!
+//! This program draws the default scene (the backlit hand and the wedge) with its own small
+//! forward renderer: its own WGSL, vertex buffers, depth-only shadow maps, a thin G-buffer
+//! pre-pass (normal, albedo) and a forward pass that writes diffuse and specular light apart.
+//! Then it hands its textures to three of the library's passes:
+//!
+//! 1. [`ShadowEntryPass`]: the skin's shadow maps (light distance, entry normal) made from
+//!    the program's own z-buffer shadow maps;
+//! 2. [`TransmittedLightPass`]: light through thin parts, added to the diffuse and specular
+//!    targets;
+//! 3. [`SssPass`]: the screen-space blur of the diffuse light, skin pixels only;
+//!
+//! and tone-maps with [`ToneMapPass`]. It writes `OUT_DIR/skin_in_your_renderer.png` and,
+//! for comparison, `OUT_DIR/skin_in_your_renderer_without_skin.png` (the same frame without
+//! the three passes).
+//!
+//! ```text
+//! cargo run --release -p subsurface-render --example skin_in_your_renderer -- [OUT_DIR]
+//! ```
+//!
+//! For brevity the program takes the scene, the materials' optics and the lights' matrices
+//! from the library (`Scene`, `MaterialCache`, `light_setup`); an engine fills
+//! `LightsUniform` and `ObjectUniform` from its own lights and materials. What the library
+//! sees of the frame is only what the passes take as inputs.
+
+use std::error::Error;
+use std::path::PathBuf;
+
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use subsurface_render::gpu_scene::{camera_uniform, object_uniform, world_per_mm};
+use subsurface_render::lights::light_setup;
+use subsurface_render::material::{MaterialCache, ProfileTable};
+use subsurface_render::passes::lighting::{self, ShadowMaps};
+use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};
+use subsurface_render::passes::sss::{SssInputs, SssPass};
+use subsurface_render::passes::tonemap::{self, ToneMapInputs, ToneMapPass};
+use subsurface_render::passes::transmitted_light::{SkinGBuffer, SkinMedium, TransmittedLightPass};
+use subsurface_render::passes::{maps, util};
+use subsurface_render::uniforms::{CameraUniform, LightsUniform};
+use subsurface_render::{DebugView, GpuContext, RenderError, RenderSettings, Scene, readback};
+
+/// The program's own shaders: a depth-only shadow pass, a G-buffer pre-pass and a forward
+/// pass (Lambert diffuse, a Beckmann specular lobe, 3x3 percentage-closer shadows).
+const FORWARD_WGSL: &str = r#"
+struct View {
+    view_proj: mat4x4<f32>,
+    position: vec4<f32>,
+    forward: vec4<f32>,
+};
+
+struct Light {
+    position: vec4<f32>,  // xyz, w = kind (0 point, 1 spot, 2 directional)
+    direction: vec4<f32>, // xyz light -> target, w = first shadow layer (-1: none)
+    color: vec4<f32>,     // rgb, w = shadow bias
+    cone: vec4<f32>,      // cos outer, cos inner, shadow map texels, atlas texels
+    view_proj: mat4x4<f32>,
+};
+
+struct Lights {
+    count: vec4<u32>,
+    ambient: vec4<f32>,
+    lights: array<Light, 8>,
+};
+
+struct Material {
+    model: mat4x4<f32>,
+    normal_matrix: mat4x4<f32>,
+    albedo: vec4<f32>,
+    params: vec4<f32>, // roughness, specular, eta, SSS strength
+    sss: vec4<f32>,    // scene units per profile mm, profile row
+};
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> lights: Lights;
+@group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
+@group(0) @binding(3) var shadow_sampler: sampler_comparison;
+@group(1) @binding(0) var<uniform> material: Material;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+};
+
+struct Varying {
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+};
+
+@vertex
+fn vs_main(v: VertexIn) -> Varying {
+    var out: Varying;
+    let world = material.model * vec4<f32>(v.position, 1.0);
+    out.world = world.xyz;
+    out.clip = view.view_proj * world;
+    out.normal = (material.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
+    return out;
+}
+
+@vertex
+fn vs_shadow(v: VertexIn) -> @builtin(position) vec4<f32> {
+    return view.view_proj * material.model * vec4<f32>(v.position, 1.0);
+}
+
+struct GBuffer {
+    @location(0) normal: vec4<f32>,
+    @location(1) albedo: vec4<f32>,
+};
+
+fn facing_normal(in: Varying, front: bool) -> vec3<f32> {
+    let n = normalize(in.normal);
+    return select(-n, n, front);
+}
+
+@fragment
+fn fs_gbuffer(in: Varying, @builtin(front_facing) front: bool) -> GBuffer {
+    var out: GBuffer;
+    out.normal = vec4<f32>(facing_normal(in, front), 0.0);
+    out.albedo = material.albedo;
+    return out;
+}
+
+fn shadow(light: Light, p: vec3<f32>, l: vec3<f32>) -> f32 {
+    if (light.direction.w < 0.0) {
+        return 1.0;
+    }
+    let clip = light.view_proj * vec4<f32>(p + l * light.color.w, 1.0);
+    let ndc = clip.xyz / clip.w;
+    let share = light.cone.z / light.cone.w;
+    let uv = (ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5)) * share;
+    let texel = 1.0 / light.cone.w;
+    var lit = 0.0;
+    for (var j = -1; j <= 1; j++) {
+        for (var i = -1; i <= 1; i++) {
+            let at = uv + vec2<f32>(f32(i), f32(j)) * texel;
+            lit += textureSampleCompareLevel(shadow_maps, shadow_sampler, at, i32(light.direction.w), min(ndc.z, 1.0));
+        }
+    }
+    return lit / 9.0;
+}
+
+fn beckmann(ndoth: f32, m: f32) -> f32 {
+    let c2 = max(ndoth * ndoth, 1e-4);
+    return exp(-(1.0 - c2) / (c2 * m * m)) / (m * m * c2 * c2);
+}
+
+fn smith_g1(c: f32, m: f32) -> f32 {
+    let a = c / (m * sqrt(max(1.0 - c * c, 1e-8)));
+    return select((3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a), 1.0, a >= 1.6);
+}
+
+fn specular(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> f32 {
+    let m = material.params.x;
+    let ndotl = dot(n, l);
+    let ndotv = dot(n, v);
+    if (ndotl <= 0.0 || ndotv <= 0.0) {
+        return 0.0;
+    }
+    let h = normalize(l + v);
+    let r = (material.params.z - 1.0) / (material.params.z + 1.0);
+    let e = pow(1.0 - clamp(dot(v, h), 0.0, 1.0), 5.0);
+    let fresnel = e + r * r * (1.0 - e);
+    let g = smith_g1(clamp(ndotv, 1e-4, 1.0), m) * smith_g1(clamp(ndotl, 1e-4, 1.0), m);
+    return material.params.y * beckmann(max(dot(n, h), 0.0), m) * fresnel * g / (4.0 * ndotv);
+}
+
+struct Lit {
+    @location(0) diffuse: vec4<f32>,
+    @location(1) specular: vec4<f32>,
+    @location(2) depth: f32,
+    @location(3) sss: vec4<f32>,
+};
+
+@fragment
+fn fs_forward(in: Varying, @builtin(front_facing) front: bool) -> Lit {
+    let n = facing_normal(in, front);
+    let v = normalize(view.position.xyz - in.world);
+    var irradiance = lights.ambient.rgb;
+    var spec = vec3<f32>(0.0);
+    for (var i = 0u; i < lights.count.x; i++) {
+        let light = lights.lights[i];
+        var l = -light.direction.xyz;
+        var radiance = light.color.rgb;
+        if (light.position.w != 2.0) {
+            let to_light = light.position.xyz - in.world;
+            l = normalize(to_light);
+            radiance /= max(dot(to_light, to_light), 1e-8);
+        }
+        if (light.position.w == 1.0) {
+            radiance *= smoothstep(light.cone.x, light.cone.y, dot(-l, light.direction.xyz));
+        }
+        let s = shadow(light, in.world, l);
+        irradiance += radiance * s * max(dot(n, l), 0.0);
+        spec += radiance * s * specular(n, l, v);
+    }
+    var out: Lit;
+    out.diffuse = vec4<f32>(material.albedo.rgb * irradiance, 1.0);
+    out.specular = vec4<f32>(spec, 1.0);
+    out.depth = dot(in.world - view.position.xyz, view.forward.xyz);
+    out.sss = vec4<f32>(material.params.w, material.sss.x, material.sss.y, 0.0);
+    return out;
+}
+"#;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ViewUniform {
+    view_proj: [[f32; 4]; 4],
+    position: [f32; 4],
+    forward: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightData {
+    position: [f32; 4],
+    direction: [f32; 4],
+    color: [f32; 4],
+    cone: [f32; 4],
+    view_proj: [[f32; 4]; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightsData {
+    count: [u32; 4],
+    ambient: [f32; 4],
+    lights: [LightData; 8],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct MaterialData {
+    model: [[f32; 4]; 4],
+    normal_matrix: [[f32; 4]; 4],
+    albedo: [f32; 4],
+    params: [f32; 4],
+    sss: [f32; 4],
+}
+
+/// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
+/// taps per pixel (the lateral map is a lower-rate evaluation inside our renderer), without
+/// the bounce between surfaces and the diffusion source's shadow shift (our lighting pass's
+/// terms, which a caller's forward pass does not have).
+pub fn example_settings(scene: &Scene, width: u32, height: u32) -> RenderSettings {
+    let mut s = scene.desc.render.clone();
+    s.width = width;
+    s.height = height;
+    s.transmittance.lateral_texel_mm = 0.0;
+    s.bounce.ring = 0;
+    s.sss.source_shift = false;
+    s
+}
+
+struct Mesh {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    count: u32,
+    material: wgpu::BindGroup,
+}
+
+fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytes,
+        usage,
+    })
+}
+
+/// Renders `scene` at `settings`' size; with `skin`, through the library's skin passes.
+pub fn render(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: &RenderSettings,
+    skin: bool,
+) -> Result<image::RgbaImage, RenderError> {
+    let device = &ctx.device;
+    let (width, height) = (settings.width, settings.height);
+    let camera: CameraUniform = camera_uniform(scene, width, height);
+    let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
+    let setup = light_setup(scene, settings)?;
+    let mut lights_uniform: LightsUniform = setup.uniform;
+    // No lateral map and no bounce: the skin passes below run their taps per pixel.
+    lights_uniform.lateral_downsample = 1;
+    lights_uniform.bounce_ring = 0;
+
+    // The program's own materials and meshes.
+    let mut cache = MaterialCache::default();
+    let profiles = ProfileTable::for_scene(scene, settings.sss.samples, &mut cache)?;
+    let module = util::wgsl_module(device, "forward", FORWARD_WGSL);
+    let uniform_entry = |b, stages| util::uniform_entry(b, stages);
+    let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("material"),
+        entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+    });
+    let mut meshes = Vec::new();
+    let mut media: Vec<SkinMedium> = Vec::new();
+    let mut media_rows = Vec::new();
+    for (i, object) in scene.objects.iter().enumerate() {
+        if object.mesh.indices.is_empty() {
+            continue;
+        }
+        let field = format!("objects[{i}].material.medium");
+        let optics = cache.get(&object.material.medium, &field)?;
+        let row = profiles.object_rows[i];
+        let m = &object.material;
+        let albedo: [f32; 3] = std::array::from_fn(|c| object.albedo[c] * optics.diffuse_albedo[c]);
+        let data = MaterialData {
+            model: object.transform.to_cols_array_2d(),
+            normal_matrix: object.transform.inverse().transpose().to_cols_array_2d(),
+            albedo: [albedo[0], albedo[1], albedo[2], 1.0],
+            params: [
+                m.roughness,
+                m.specular,
+                optics.dipole.eta as f32,
+                m.sss_strength,
+            ],
+            sss: [world_per_mm(object), row as f32, 0.0, 0.0],
+        };
+        let uniform = buffer(
+            device,
+            "material",
+            bytemuck::bytes_of(&data),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let material = util::bind_group(
+            device,
+            "material",
+            &material_layout,
+            [(0, uniform.as_entire_binding())],
+        );
+        meshes.push(Mesh {
+            vertices: buffer(
+                device,
+                "vertices",
+                bytemuck::cast_slice(&object.mesh.vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: buffer(
+                device,
+                "indices",
+                bytemuck::cast_slice(&object.mesh.indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            count: object.mesh.indices.len() as u32,
+            material,
+        });
+        // The skin's media: one per profile row.
+        if m.sss_strength > 0.0 && !media_rows.contains(&row) {
+            media.push(SkinMedium::new(
+                ctx,
+                &optics,
+                object_uniform(object, &optics, 0.0, row),
+            )?);
+            media_rows.push(row);
+        }
+    }
+
+    // The program's own shadow maps: a z-buffer per light, drawn with the lights' matrices.
+    let atlas = setup.atlas_size;
+    let layer_count = setup.layers.len().max(1) as u32;
+    let shadow_depth = util::texture_2d(
+        device,
+        "shadow maps",
+        atlas,
+        atlas,
+        layer_count,
+        wgpu::TextureFormat::Depth32Float,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let shadow_array = util::array_view(&shadow_depth);
+    let mut lights = LightsData {
+        count: [lights_uniform.count, 0, 0, 0],
+        ambient: [
+            settings.ambient[0],
+            settings.ambient[1],
+            settings.ambient[2],
+            0.0,
+        ],
+        lights: bytemuck::Zeroable::zeroed(),
+    };
+    for (i, l) in lights_uniform
+        .lights
+        .iter()
+        .take(lights_uniform.count as usize)
+        .enumerate()
+    {
+        let size = setup
+            .layers
+            .iter()
+            .find(|s| s.light == i)
+            .map_or(1, |s| s.size);
+        lights.lights[i] = LightData {
+            position: [l.position[0], l.position[1], l.position[2], l.kind],
+            direction: [
+                l.direction[0],
+                l.direction[1],
+                l.direction[2],
+                l.first_layer,
+            ],
+            color: [l.color[0], l.color[1], l.color[2], l.shadow_bias],
+            cone: [l.cos_outer, l.cos_inner, size as f32, atlas as f32],
+            view_proj: l.view_proj[0],
+        };
+    }
+    let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("view"),
+        entries: &[
+            uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            util::sampler_entry(
+                3,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::SamplerBindingType::Comparison,
+            ),
+        ],
+    });
+    let shadow_view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("shadow view"),
+        entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX)],
+    });
+    let lights_buffer = buffer(
+        device,
+        "lights",
+        bytemuck::bytes_of(&lights),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let compare = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("shadow compare"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let view_data = ViewUniform {
+        view_proj: camera.view_proj,
+        position: Vec3::from(camera.position).extend(1.0).to_array(),
+        forward: Vec3::from(camera.forward).extend(0.0).to_array(),
+    };
+    let view_buffer = buffer(
+        device,
+        "view",
+        bytemuck::bytes_of(&view_data),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let view_group = util::bind_group(
+        device,
+        "view",
+        &view_layout,
+        [
+            (0, view_buffer.as_entire_binding()),
+            (1, lights_buffer.as_entire_binding()),
+            (2, wgpu::BindingResource::TextureView(&shadow_array)),
+            (3, wgpu::BindingResource::Sampler(&compare)),
+        ],
+    );
+
+    let vertex_layout = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<subsurface_render::mesh::Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+    };
+    let depth_state = |compare| {
+        Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        })
+    };
+    let pipeline = |label,
+                    layout: &wgpu::PipelineLayout,
+                    vertex,
+                    fragment: Option<&str>,
+                    targets: &[Option<wgpu::ColorTargetState>],
+                    compare| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some(vertex),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout.clone())],
+            },
+            primitive: Default::default(),
+            depth_stencil: depth_state(compare),
+            multisample: Default::default(),
+            fragment: fragment.map(|f| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(f),
+                compilation_options: Default::default(),
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let shadow_layout =
+        util::pipeline_layout(device, "shadow", &[&shadow_view_layout, &material_layout]);
+    let forward_layout =
+        util::pipeline_layout(device, "forward", &[&view_layout, &material_layout]);
+    let shadow_pipeline = pipeline(
+        "shadow",
+        &shadow_layout,
+        "vs_shadow",
+        None,
+        &[],
+        wgpu::CompareFunction::Less,
+    );
+    let f16 = wgpu::TextureFormat::Rgba16Float;
+    let gbuffer_pipeline = pipeline(
+        "g-buffer",
+        &forward_layout,
+        "vs_main",
+        Some("fs_gbuffer"),
+        &[Some(f16.into()), Some(f16.into())],
+        wgpu::CompareFunction::Less,
+    );
+    let forward_targets = [f16, f16, wgpu::TextureFormat::R32Float, f16].map(|f| Some(f.into()));
+    let forward_pipeline = pipeline(
+        "forward",
+        &forward_layout,
+        "vs_main",
+        Some("fs_forward"),
+        &forward_targets,
+        wgpu::CompareFunction::Equal,
+    );
+
+    // The frame's targets.
+    let target = |label, format| util::render_target(device, label, width, height, format);
+    let diffuse = target("diffuse", f16);
+    let specular = target("specular", f16);
+    let depth = target("linear depth", wgpu::TextureFormat::R32Float);
+    let sss = target("sss", f16);
+    let normal = target("normal", f16);
+    let albedo = target("albedo", f16);
+    let zbuffer = util::texture_2d(
+        device,
+        "zbuffer",
+        width,
+        height,
+        1,
+        wgpu::TextureFormat::Depth32Float,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    let tv = |t: &wgpu::Texture| t.create_view(&Default::default());
+    let views = [&diffuse, &specular, &depth, &sss, &normal, &albedo].map(tv);
+    let zview = tv(&zbuffer);
+
+    let mut encoder = device.create_command_encoder(&Default::default());
+    for (i, layer) in setup.layers.iter().enumerate() {
+        let data = ViewUniform {
+            view_proj: layer.view_proj.to_cols_array_2d(),
+            position: [0.0; 4],
+            forward: [0.0; 4],
+        };
+        let uniform = buffer(
+            device,
+            "shadow view",
+            bytemuck::bytes_of(&data),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let group = util::bind_group(
+            device,
+            "shadow view",
+            &shadow_view_layout,
+            [(0, uniform.as_entire_binding())],
+        );
+        let target = util::layer_view(&shadow_depth, i as u32);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow"),
+            color_attachments: &[],
+            depth_stencil_attachment: util::depth_attachment(
+                &target,
+                wgpu::LoadOp::Clear(1.0),
+                wgpu::StoreOp::Store,
+            ),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_viewport(0.0, 0.0, layer.size as f32, layer.size as f32, 0.0, 1.0);
+        pass.set_scissor_rect(0, 0, layer.size, layer.size);
+        pass.set_pipeline(&shadow_pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        draw(&mut pass, &meshes);
+    }
+    let bg = settings.background;
+    let clear = |r: f32, g: f32, b: f32| {
+        wgpu::LoadOp::Clear(wgpu::Color {
+            r: r.into(),
+            g: g.into(),
+            b: b.into(),
+            a: 1.0,
+        })
+    };
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("g-buffer"),
+            color_attachments: &[
+                util::color_attachment(&views[4], clear(0.0, 0.0, 0.0)),
+                util::color_attachment(&views[5], clear(0.0, 0.0, 0.0)),
+            ],
+            depth_stencil_attachment: util::depth_attachment(
+                &zview,
+                wgpu::LoadOp::Clear(1.0),
+                wgpu::StoreOp::Store,
+            ),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&gbuffer_pipeline);
+        pass.set_bind_group(0, &view_group, &[]);
+        draw(&mut pass, &meshes);
+    }
+    {
+        let far = scene.desc.camera.far;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("forward"),
+            color_attachments: &[
+                util::color_attachment(&views[0], clear(bg[0], bg[1], bg[2])),
+                util::color_attachment(&views[1], clear(0.0, 0.0, 0.0)),
+                util::color_attachment(&views[2], clear(far, 0.0, 0.0)),
+                util::color_attachment(&views[3], wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
+            ],
+            depth_stencil_attachment: util::depth_attachment(
+                &zview,
+                wgpu::LoadOp::Load,
+                wgpu::StoreOp::Discard,
+            ),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&forward_pipeline);
+        pass.set_bind_group(0, &view_group, &[]);
+        draw(&mut pass, &meshes);
+    }
+
+    // The library's passes, on the program's textures. They are built here each frame for a
+    // short program; an application builds them once and re-encodes them every frame.
+    let entry_layers: Vec<EntryLayer> = setup
+        .layers
+        .iter()
+        .map(|l| {
+            let light = &lights_uniform.lights[l.light];
+            EntryLayer {
+                view_proj: l.view_proj,
+                kind: light.kind,
+                origin: l.origin,
+                direction: Vec3::from(light.direction),
+                size: l.size,
+            }
+        })
+        .collect();
+    let transmitted = TransmittedLightPass::new(device, settings);
+    let mut blur = SssPass::new(device, &settings.sss, &profiles.kernels)?;
+    let entry = ShadowEntryPass::new(device, &shadow_array, atlas, &entry_layers);
+    let uniform = |bytes: &[u8]| buffer(device, "skin uniform", bytes, wgpu::BufferUsages::UNIFORM);
+    let (camera_buffer, skin_lights) = (
+        uniform(bytemuck::bytes_of(&camera)),
+        uniform(bytemuck::bytes_of(&lights_uniform)),
+    );
+    let tsm = maps::dummy_tsm_view(device);
+    let shadow = ShadowMaps {
+        atlas: entry.atlas_view(),
+        depth: &shadow_array,
+        flux: None,
+    };
+    let frame = lighting::frame_bind_group(
+        device,
+        transmitted.frame_layout(),
+        [&camera_buffer, &skin_lights],
+        shadow,
+        &tsm,
+    );
+    let gbuffer = SkinGBuffer {
+        depth: &views[2],
+        normal: &views[4],
+        albedo: &views[5],
+        medium: &views[3],
+    };
+    let gbuffer = transmitted.bind_gbuffer(device, &gbuffer, view_proj);
+    if skin {
+        entry.encode(&mut encoder, None);
+        transmitted.encode(
+            &mut encoder,
+            &frame,
+            &gbuffer,
+            &media,
+            [&views[0], &views[1]],
+            None,
+        );
+        blur.resize(
+            device,
+            &SssInputs {
+                diffuse: &diffuse,
+                depth: &views[2],
+                sss: &views[3],
+            },
+        );
+        blur.prepare(&ctx.queue, camera.focal_px);
+        blur.encode(&mut encoder, None);
+    }
+
+    // Tone mapping into an sRGB image.
+    let output = util::texture_2d(
+        device,
+        "output",
+        width,
+        height,
+        1,
+        tonemap::OUTPUT_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let tone = ToneMapPass::new(device, tonemap::OUTPUT_FORMAT);
+    tone.set_params(
+        &ctx.queue,
+        settings.exposure_ev,
+        DebugView::Final,
+        scene.desc.camera.far,
+    );
+    let inputs = ToneMapInputs {
+        diffuse: &views[0],
+        specular: &views[1],
+        depth: &views[2],
+        sss: &views[3],
+    };
+    tone.encode(
+        &mut encoder,
+        &tone.bind(device, &inputs),
+        &tv(&output),
+        None,
+    );
+    ctx.queue.submit([encoder.finish()]);
+    ctx.check()?;
+    readback::read_rgba8(ctx, &output)
+}
+
+fn draw(pass: &mut wgpu::RenderPass<'_>, meshes: &[Mesh]) {
+    for m in meshes {
+        pass.set_bind_group(1, &m.material, &[]);
+        pass.set_vertex_buffer(0, m.vertices.slice(..));
+        pass.set_index_buffer(m.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..m.count, 0, 0..1);
+    }
+}
+
+#[allow(dead_code)]
+fn main() -> Result<(), Box<dyn Error>> {
+    let out_dir = PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| ".".into()));
+    std::fs::create_dir_all(&out_dir)?;
+    let ctx = GpuContext::new_headless()?;
+    println!("adapter: {}", ctx.adapter_name());
+    let scene = Scene::default_scene();
+    let settings = example_settings(&scene, scene.desc.render.width, scene.desc.render.height);
+    for (skin, name) in [
+        (true, "skin_in_your_renderer.png"),
+        (false, "skin_in_your_renderer_without_skin.png"),
+    ] {
+        let image = render(&ctx, &scene, &settings, skin)?;
+        let path = out_dir.join(name);
+        image.save(&path)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,275 @@
+//! The transmitted light pass: transmittance through thin parts for a renderer that is not
+//! ours. Our lighting pass evaluates it per fragment ([`crate::passes::lighting`]); this pass
+//! evaluates the same WGSL (`transmittance` in transmittance.wgsl, every method but the
+//! translucent shadow maps) per pixel of a caller's G-buffer and adds it to the caller's
+//! diffuse target, before the SSS blur ([`crate::passes::sss::SssPass`]), and `diffusion`'s
+//! unscattered part to its specular target.
+//!
+//! Inputs, all the caller's:
+//! - group 0, [`crate::passes::lighting::frame_bind_group`]: the camera and the lights
+//!   (`CameraUniform`, `LightsUniform`), its shadow maps' z-buffer, and the skin's shadow maps
+//!   made from it by [`crate::passes::shadow_entry::ShadowEntryPass`];
+//! - group 1, one [`SkinMedium`] per row of the SSS profile table: the medium's optics and T(s)
+//!   tables;
+//! - group 2, [`SkinGBuffer`]: linear depth, the vertex normal, the albedo and the SSS
+//!   pass's per-pixel medium row.
+//!
+//! `diffusion`'s lateral taps run per pixel here (the lateral map, a lower-rate evaluation, is
+//! our renderer's), and the bounce between surfaces is not part of the pass.
+
+use glam::Mat4;
+use wgpu::util::DeviceExt;
+
+use crate::error::RenderError;
+use crate::gpu::GpuContext;
+use crate::gpu::object::object_layout;
+use crate::material::MaterialOptics;
+use crate::passes::lighting::{self, RADIANCE_FORMAT};
+use crate::passes::overrides::{
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, Terms,
+};
+use crate::passes::{transmittance, util};
+use crate::settings::{RenderSettings, TransmittanceMethod};
+use crate::timing::TimedPass;
+use crate::uniforms::ObjectUniform;
+
+pub const SHADER: &str = concat!(
+    include_str!("../fullscreen.wgsl"),
+    include_str!("../common.wgsl"),
+    include_str!("../lighting/lighting.wgsl"),
+    include_str!("../shadow_lookup.wgsl"),
+    include_str!("../transmittance.wgsl"),
+    include_str!("../bounce.wgsl"),
+    include_str!("../lateral_map/lateral.wgsl"),
+    include_str!("transmitted_light.wgsl")
+);
+
+/// The caller's G-buffer, one texel per pixel of the frame, all readable as unfilterable
+/// floats (`R32Float`, `Rgba16Float`, `Rgba32Float`, ...).
+#[derive(Clone, Copy)]
+pub struct SkinGBuffer<'a> {
+    /// Linear view depth in scene units, measured along the camera's forward axis
+    /// (`CameraUniform::forward`), as [`crate::passes::sss::SssInputs::depth`].
+    pub depth: &'a wgpu::TextureView,
+    /// xyz: the interpolated vertex normal in world space, turned toward the camera (not the
+    /// normal-mapped one: thickness and the light's way out follow the geometry).
+    pub normal: &'a wgpu::TextureView,
+    /// rgb: the linear albedo the diffuse light is multiplied by.
+    pub albedo: &'a wgpu::TextureView,
+    /// The SSS pass's per-pixel input ([`crate::passes::sss::SssInputs::sss`]): strength (0 =
+    /// not skin), scene units per profile millimetre, profile row.
+    pub medium: &'a wgpu::TextureView,
+}
+
+/// One medium's group 1: its [`ObjectUniform`] (optics, boundary, scale) and T(s) tables.
+pub struct SkinMedium {
+    pub bind_group: wgpu::BindGroup,
+    pub uniform: wgpu::Buffer,
+}
+
+impl SkinMedium {
+    /// `uniform.profile` is the medium's row in the SSS profile table: the pixels whose
+    /// [`SkinGBuffer::medium`] names that row take this medium. `uniform.lut_range_mm` is
+    /// set here, from the tables made of `optics`
+    /// ([`crate::gpu_scene::object_uniform`] fills the rest from a scene object).
+    pub fn new(
+        ctx: &GpuContext,
+        optics: &MaterialOptics,
+        uniform: ObjectUniform,
+    ) -> Result<Self, RenderError> {
+        let device = &ctx.device;
+        let (lut, range) = transmittance::lut_texture(ctx, optics)?;
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("skin medium"),
+            contents: bytemuck::bytes_of(&ObjectUniform {
+                lut_range_mm: range,
+                ..uniform
+            }),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        // The material maps of group 1 belong to the lighting pass; this pass never reads them.
+        let unused = util::dummy_view(
+            device,
+            "skin medium (no maps)",
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("transmittance lut"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let view = wgpu::BindingResource::TextureView;
+        let bind_group = util::bind_group(
+            device,
+            "skin medium",
+            &object_layout(device),
+            [
+                (0, uniform.as_entire_binding()),
+                (1, view(&unused)),
+                (2, view(&unused)),
+                (3, view(&unused)),
+                (4, wgpu::BindingResource::Sampler(&sampler)),
+                (5, view(&lut)),
+                (6, wgpu::BindingResource::Sampler(&sampler)),
+            ],
+        );
+        Ok(Self {
+            bind_group,
+            uniform,
+        })
+    }
+}
+
+/// Adds transmitted light to a caller's targets (see the module's documentation).
+pub struct TransmittedLightPass {
+    pipeline: wgpu::RenderPipeline,
+    frame_layout: wgpu::BindGroupLayout,
+    gbuffer_layout: wgpu::BindGroupLayout,
+    method: TransmittanceMethod,
+}
+
+impl TransmittedLightPass {
+    /// The pass for `settings`' transmittance (method, lateral taps, terms), drawing into
+    /// `RADIANCE_FORMAT` (`Rgba16Float`) diffuse and specular targets.
+    pub fn new(device: &wgpu::Device, settings: &RenderSettings) -> Self {
+        let t = &settings.transmittance;
+        let module = util::wgsl_module(device, "transmitted_light.wgsl", SHADER);
+        let frame_layout = lighting::frame_layout(device);
+        let texture = |binding| {
+            util::float_texture_entry(
+                binding,
+                wgpu::ShaderStages::FRAGMENT,
+                false,
+                wgpu::TextureViewDimension::D2,
+            )
+        };
+        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("skin g-buffer"),
+            entries: &[
+                util::uniform_entry(16, wgpu::ShaderStages::FRAGMENT),
+                texture(17),
+                texture(18),
+                texture(19),
+                texture(20),
+            ],
+        });
+        let layout = util::pipeline_layout(
+            device,
+            "transmitted light",
+            &[&frame_layout, &object_layout(device), &gbuffer_layout],
+        );
+        // Taps per pixel (2), or none where `diffusion` has none or another method runs (0).
+        let taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+        let constants = [
+            (TRANSMITTANCE_METHOD, f64::from(t.method.code())),
+            (LATERAL_SOURCE, if taps { 2.0 } else { 0.0 }),
+            (DIFFUSION_TERMS, f64::from(Terms::of(settings).0)),
+            (BOUNCE_SOURCE, 0.0),
+        ];
+        let target = Some(util::additive_target(RADIANCE_FORMAT));
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("transmitted light"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_deferred_transmitted"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                },
+                targets: &[target.clone(), target],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            pipeline,
+            frame_layout,
+            gbuffer_layout,
+            method: t.method,
+        }
+    }
+
+    /// The layout of group 0, for [`crate::passes::lighting::frame_bind_group`].
+    pub fn frame_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.frame_layout
+    }
+
+    /// Group 2 from the caller's G-buffer; `view_proj` is the camera's (`CameraUniform`'s).
+    pub fn bind_gbuffer(
+        &self,
+        device: &wgpu::Device,
+        gbuffer: &SkinGBuffer<'_>,
+        view_proj: Mat4,
+    ) -> wgpu::BindGroup {
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("skin view"),
+            contents: bytemuck::cast_slice(&view_proj.inverse().to_cols_array()),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let view = wgpu::BindingResource::TextureView;
+        util::bind_group(
+            device,
+            "skin g-buffer",
+            &self.gbuffer_layout,
+            [
+                (16, uniform.as_entire_binding()),
+                (17, view(gbuffer.depth)),
+                (18, view(gbuffer.normal)),
+                (19, view(gbuffer.albedo)),
+                (20, view(gbuffer.medium)),
+            ],
+        )
+    }
+
+    /// Adds the transmitted light of every medium into `diffuse` and `specular` (both
+    /// `RADIANCE_FORMAT`, loaded and stored). Nothing is drawn for `off` and for translucent
+    /// shadow maps, which need texture-space diffusion.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &wgpu::BindGroup,
+        gbuffer: &wgpu::BindGroup,
+        media: &[SkinMedium],
+        [diffuse, specular]: [&wgpu::TextureView; 2],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        if matches!(
+            self.method,
+            TransmittanceMethod::Off | TransmittanceMethod::Tsm
+        ) {
+            return;
+        }
+        let timer = TimedPass::begin(profiler, "transmitted light", encoder);
+        {
+            let load = |v| util::color_attachment(v, wgpu::LoadOp::Load);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("transmitted light"),
+                color_attachments: &[load(diffuse), load(specular)],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, frame, &[]);
+            pass.set_bind_group(2, gbuffer, &[]);
+            for medium in media {
+                pass.set_bind_group(1, &medium.bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            }
+        }
+        timer.end(profiler, encoder);
+    }
+}
