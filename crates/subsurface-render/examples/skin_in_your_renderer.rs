@@ -416,16 +416,7 @@ pub fn render(
         entries: &[
             uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
             uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            },
+            util::depth_array_entry(2, wgpu::ShaderStages::FRAGMENT),
             util::sampler_entry(
                 3,
                 wgpu::ShaderStages::FRAGMENT,

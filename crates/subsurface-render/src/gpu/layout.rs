@@ -35,6 +35,24 @@ pub fn float_texture_entry(
     }
 }
 
+/// A depth texture array at `binding` (`texture_depth_2d_array`): shadow maps' z-buffers, read
+/// with `textureLoad` or through a comparison sampler.
+pub fn depth_array_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 /// A sampler at `binding`.
 pub fn sampler_entry(
     binding: u32,

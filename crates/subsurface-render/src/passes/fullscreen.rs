@@ -16,6 +16,18 @@ pub fn pipeline(
     fragment: &str,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
+    pipeline_with_constants(device, module, layout, fragment, targets, &[])
+}
+
+/// As [`pipeline`], with the fragment stage's WGSL overrides set to `constants`.
+pub fn pipeline_with_constants(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: Option<&wgpu::PipelineLayout>,
+    fragment: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(fragment),
         layout,
@@ -31,7 +43,10 @@ pub fn pipeline(
         fragment: Some(wgpu::FragmentState {
             module,
             entry_point: Some(fragment),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             targets,
         }),
         multiview_mask: None,

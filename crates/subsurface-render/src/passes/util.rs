@@ -5,7 +5,8 @@
 use wgpu::util::DeviceExt;
 
 pub use crate::gpu::layout::{
-    float_texture_entry, sampler_entry, storage_entry, storage_texture_entry, uniform_entry,
+    depth_array_entry, float_texture_entry, sampler_entry, storage_entry, storage_texture_entry,
+    uniform_entry,
 };
 use crate::gpu::object::{GpuObject, VERTEX_LAYOUT};
 pub use crate::gpu::supports_compute_storage;

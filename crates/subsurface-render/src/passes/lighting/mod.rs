@@ -60,16 +60,7 @@ pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     };
     // The shadow maps' z-buffer, read through a comparison sampler: each gather tests a 2x2
     // block of texels in the texture unit (hardware PCF).
-    let depth = wgpu::BindGroupLayoutEntry {
-        binding: 4,
-        visibility: stages,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Depth,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
-        },
-        count: None,
-    };
+    let depth = util::depth_array_entry(4, stages);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lighting frame"),
         entries: &[

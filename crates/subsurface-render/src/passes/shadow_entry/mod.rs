@@ -79,16 +79,7 @@ impl ShadowEntryPass {
             label: Some("shadow entry"),
             entries: &[
                 util::uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                util::depth_array_entry(1, wgpu::ShaderStages::FRAGMENT),
             ],
         });
         let pipeline_layout = util::pipeline_layout(device, "shadow entry", &[&layout]);

@@ -28,7 +28,7 @@ use crate::passes::lighting::{self, RADIANCE_FORMAT};
 use crate::passes::overrides::{
     BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, Terms,
 };
-use crate::passes::{transmittance, util};
+use crate::passes::{fullscreen, transmittance, util};
 use crate::settings::{RenderSettings, TransmittanceMethod};
 use crate::timing::TimedPass;
 use crate::uniforms::ObjectUniform;
@@ -169,30 +169,14 @@ impl TransmittedLightPass {
             (BOUNCE_SOURCE, 0.0),
         ];
         let target = Some(util::additive_target(RADIANCE_FORMAT));
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("transmitted light"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_deferred_transmitted"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
-                targets: &[target.clone(), target],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = fullscreen::pipeline_with_constants(
+            device,
+            &module,
+            Some(&layout),
+            "fs_deferred_transmitted",
+            &[target.clone(), target],
+            &constants,
+        );
         Self {
             pipeline,
             frame_layout,
