@@ -315,6 +315,80 @@ pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 
         .collect()
 }
 
+/// The pixels `[x0, y0, x1, y1)` the separable blur must cover on a `width` x `height` frame
+/// ([`crate::passes::sss::SssPass::set_region`]): each skin object's box on screen
+/// ([`screen_rects`]) grown by the farthest its taps reach there, a tap's offset in mm (plus
+/// its jitter) times the pixels per mm at the box's nearest depth. Skin usually covers a part
+/// of the frame, and the blur costs per pixel it runs on. `kernels` is the profile table and
+/// `rows` each scene object's row in it; empty (`[0, 0, 0, 0]`) where no skin is in view.
+pub fn sss_region(
+    scene: &Scene,
+    (width, height): (u32, u32),
+    kernels: &[subsurface_profile::ScreenKernels],
+    rows: &[u32],
+    jitter: bool,
+) -> [u32; 4] {
+    let camera = camera_uniform(scene, width, height);
+    let (position, forward) = (Vec3::from(camera.position), Vec3::from(camera.forward));
+    let drawn = scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| !o.mesh.indices.is_empty());
+    let mut region: Option<[u32; 4]> = None;
+    for ((i, o), rect) in drawn.zip(screen_rects(scene, width, height)) {
+        let (Some([x0, y0, x1, y1]), Some(kernel)) =
+            (rect, rows.get(i).and_then(|&r| kernels.get(r as usize)))
+        else {
+            continue;
+        };
+        if o.material.sss_strength <= 0.0 {
+            continue;
+        }
+        let taps = &kernel.separable;
+        let widths = if jitter {
+            subsurface_profile::separable_jitter_widths(taps)
+        } else {
+            vec![0.0; taps.len()]
+        };
+        let reach_mm = taps
+            .iter()
+            .zip(&widths)
+            .map(|(t, w)| t[3].abs() + w)
+            .fold(0.0f32, f32::max);
+        let (lo, hi) = o.world_bounds();
+        let nearest = crate::scene::box_corners(lo, hi)
+            .iter()
+            .map(|c| (*c - position).dot(forward))
+            .fold(f32::INFINITY, f32::min)
+            .max(camera.near);
+        let px_per_mm = world_per_mm(o) * camera.focal_px / nearest * o.material.sss_strength;
+        // Two more pixels: a tap reads the two texels around it (bilinear weights).
+        let reach = (reach_mm * px_per_mm).ceil() + 2.0;
+        let grow = if reach.is_finite() && reach < (width.max(height)) as f32 {
+            reach as u32
+        } else {
+            width.max(height)
+        };
+        let rect = [
+            x0.saturating_sub(grow),
+            y0.saturating_sub(grow),
+            x1.saturating_add(grow).min(width),
+            y1.saturating_add(grow).min(height),
+        ];
+        region = Some(match region {
+            None => rect,
+            Some(r) => [
+                r[0].min(rect[0]),
+                r[1].min(rect[1]),
+                r[2].max(rect[2]),
+                r[3].max(rect[3]),
+            ],
+        });
+    }
+    region.unwrap_or([0; 4])
+}
+
 /// Whether any of the box `(lo, hi)` may lie in the view of `view_proj` (wgpu clip space): no
 /// frustum plane has all eight corners outside it.
 fn in_view(view_proj: Mat4, (lo, hi): (Vec3, Vec3)) -> bool {

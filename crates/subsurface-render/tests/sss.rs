@@ -433,6 +433,63 @@ fn non_skin_pixels_are_bit_identical_with_and_without_sss() {
     }
 }
 
+/// The renderer blurs only the skin's part of the frame (`frame_plan::sss_region`): its
+/// pixels come out bit for bit as the pass run over the whole frame on the same inputs gives
+/// them, and the part is well under the frame.
+#[test]
+fn the_skin_region_blurs_as_the_whole_frame_does() {
+    let Some(ctx) = context() else { return };
+    let s = subsurface_render::Scene::default_scene();
+    let (w, h) = (256, 144);
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        ..s.desc.render.clone()
+    };
+    let render = |view| {
+        let options = RenderOptions {
+            settings: settings.clone(),
+            view,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&ctx, &s, options).unwrap();
+        r.render().unwrap();
+        r
+    };
+    let before = render(DebugView::DiffuseBeforeSss);
+    let after = render(DebugView::Final);
+    let table = after.profile_table();
+    let region = subsurface_render::frame_plan::sss_region(
+        &s,
+        (w, h),
+        &table.kernels,
+        &table.object_rows,
+        settings.sss.jitter,
+    );
+    let area = region[2].saturating_sub(region[0]) * region[3].saturating_sub(region[1]);
+    eprintln!("region {region:?}: {area} of {} pixels", w * h);
+    assert!(area > 0 && area < w * h / 2, "region {region:?}");
+    let sss = after.read_sss().unwrap();
+    let rgb = |v: Vec<[f32; 4]>| v.into_iter().map(|p| [p[0], p[1], p[2]]).collect();
+    let input = ScreenInput {
+        width: w,
+        height: h,
+        color: rgb(before.read_diffuse().unwrap()),
+        depth: after.read_linear_depth().unwrap(),
+        strength: sss.iter().map(|p| p[0]).collect(),
+        world_per_mm: sss.iter().map(|p| p[1]).collect(),
+        profile: sss.iter().map(|p| p[2] as u32).collect(),
+    };
+    let focal = subsurface_render::gpu_scene::camera_uniform(&s, w, h).focal_px;
+    let whole = run_gpu_at(&ctx, &input, &settings.sss, &table.kernels, true, focal);
+    let ours: Vec<[f32; 3]> = rgb(after.read_diffuse().unwrap());
+    assert!(
+        max_abs_diff(&whole, &input.color) > 0.01,
+        "nothing was blurred"
+    );
+    assert_eq!(max_abs_diff(&whole, &ours), 0.0);
+}
+
 /// The blur has the same physical size at any resolution: 256 px and 512 px downsampled agree.
 /// Compared on skin pixels away from silhouettes, whose aliasing (there is no MSAA) differs
 /// between the two resolutions whatever SSS does.

@@ -135,6 +135,17 @@ fn profile_table(scene: &Scene, options: &RenderOptions) -> Result<ProfileTable,
     )
 }
 
+/// The pixels the blur runs on ([`crate::frame_plan::sss_region`]).
+fn sss_region(scene: &Scene, options: &RenderOptions, profiles: &ProfileTable) -> [u32; 4] {
+    crate::frame_plan::sss_region(
+        scene,
+        (options.width(), options.height()),
+        &profiles.kernels,
+        &profiles.object_rows,
+        options.settings.sss.jitter,
+    )
+}
+
 fn light_kinds(lights: &gpu_scene::LightSetup, count: usize) -> Vec<[f32; 4]> {
     (0..count)
         .map(|i| {
@@ -251,6 +262,7 @@ impl Renderer {
             },
         );
         sss.prepare(&ctx.queue, camera.focal_px);
+        sss.set_region(&ctx.queue, Some(sss_region(scene, &options, &profiles)));
         let output = output_texture(ctx, options.width(), options.height());
         let profiler = timing::new_profiler(device)?;
         let copy = options
@@ -433,6 +445,8 @@ impl Renderer {
             );
         }
         self.sss.prepare(&queue, camera.focal_px);
+        self.sss
+            .set_region(&queue, Some(sss_region(scene, options, &self.profiles)));
         if resized || options.baseline_copy != self.copy.is_some() {
             self.copy = options
                 .baseline_copy

@@ -83,6 +83,18 @@ pub fn run_gpu_on(
     table: &[ScreenKernels],
     storage: bool,
 ) -> Vec<[f32; 3]> {
+    run_gpu_at(ctx, input, config, table, storage, FOCAL)
+}
+
+/// As `run_gpu_on`, for a camera of focal length `focal_px` (pixels).
+pub fn run_gpu_at(
+    ctx: &GpuContext,
+    input: &ScreenInput,
+    config: &SssSettings,
+    table: &[ScreenKernels],
+    storage: bool,
+    focal_px: f32,
+) -> Vec<[f32; 3]> {
     let (w, h) = (input.width, input.height);
     let colour: Vec<half::f16> = input
         .color
@@ -136,7 +148,7 @@ pub fn run_gpu_on(
             sss: &view(&sss),
         },
     );
-    pass.prepare(&ctx.queue, FOCAL);
+    pass.prepare(&ctx.queue, focal_px);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     pass.encode(&mut encoder, None);
     ctx.queue.submit([encoder.finish()]);

@@ -94,6 +94,8 @@ struct SssUniform {
     /// Jittered separable: first table row of the taps' jitter half-widths.
     widths: u32,
     _pad: u32,
+    /// The separable passes' pixels `[x0, y0, x1, y1)` ([`SssPass::set_region`]).
+    region: [u32; 4],
 }
 
 /// The textures the pass works on. `diffuse` is read and overwritten (usage
@@ -113,8 +115,8 @@ struct Step {
     bind_group: wgpu::BindGroup,
     target: usize,
     accum: bool,
-    /// A compute step (the workgroup fetch's 1-D passes): its workgroups in x and y.
-    dispatch: Option<[u32; 2]>,
+    /// A compute step (the workgroup fetch's 1-D passes): along rows (true) or columns.
+    dispatch: Option<bool>,
 }
 
 struct Bound {
@@ -153,6 +155,10 @@ pub struct SssPass {
     profiles: usize,
     taps: usize,
     focal_px: f32,
+    /// Where the skin lies ([`Self::set_region`]); `None`: anywhere.
+    region: Option<[u32; 4]>,
+    /// The bound inputs' size.
+    size: [u32; 2],
     bound: Option<Bound>,
 }
 
@@ -188,6 +194,8 @@ impl SssPass {
             profiles: 0,
             taps: 0,
             focal_px: 1.0,
+            region: None,
+            size: [0, 0],
             bound: None,
         };
         pass.set_settings(device, settings, profiles)?;
@@ -238,15 +246,7 @@ impl SssPass {
             contents: bytemuck::cast_slice(&table_rows(profiles)),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        self.uniforms = (0..self.step_count())
-            .map(|i| {
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("sss uniform"),
-                    contents: bytemuck::bytes_of(&self.uniform(i)),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                })
-            })
-            .collect();
+        self.uniforms = self.make_uniforms(device);
         self.bound = None;
         Ok(())
     }
@@ -255,8 +255,48 @@ impl SssPass {
     /// 0.5 * height / tan(fov_y / 2).
     pub fn prepare(&mut self, queue: &wgpu::Queue, focal_px: f32) {
         self.focal_px = focal_px;
+        self.write_uniforms(queue);
+    }
+
+    /// One uniform buffer per step, holding the current values.
+    fn make_uniforms(&self, device: &wgpu::Device) -> Vec<wgpu::Buffer> {
+        (0..self.step_count())
+            .map(|i| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("sss uniform"),
+                    contents: bytemuck::bytes_of(&self.uniform(i)),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                })
+            })
+            .collect()
+    }
+
+    fn write_uniforms(&self, queue: &wgpu::Queue) {
         for (i, u) in self.uniforms.iter().enumerate() {
             queue.write_buffer(u, 0, bytemuck::bytes_of(&self.uniform(i)));
+        }
+    }
+
+    /// Limits the separable method to the pixels `[x0, y0, x1, y1)` of `region`, which must
+    /// hold every skin pixel and every pixel a skin pixel's taps reach
+    /// (`frame_plan::sss_region` finds it from the skin's bounds and the kernels' reach);
+    /// pixels outside are left untouched and cost nothing, and an empty region skips the
+    /// passes. `None` runs over the whole frame. The other methods always run over the whole
+    /// frame.
+    pub fn set_region(&mut self, queue: &wgpu::Queue, region: Option<[u32; 4]>) {
+        self.region = region;
+        self.write_uniforms(queue);
+    }
+
+    /// The separable passes' pixels, within the bound inputs.
+    fn region_px(&self) -> [u32; 4] {
+        let [w, h] = self.size;
+        match self.region {
+            Some([x0, y0, x1, y1]) if self.settings.method == SssMethod::Separable => {
+                let (x1, y1) = (x1.min(w), y1.min(h));
+                [x0.min(x1), y0.min(y1), x1, y1]
+            }
+            _ => [0, 0, w, h],
         }
     }
 
@@ -297,6 +337,7 @@ impl SssPass {
             gaussians: taps + HABLE_ROWS as u32,
             widths: taps + (HABLE_ROWS + subsurface_profile::SCREEN_GAUSSIANS) as u32,
             profiles: self.profiles as u32,
+            region: self.region_px(),
             ..Default::default()
         };
         let horizontal = [1.0, 0.0];
@@ -325,6 +366,9 @@ impl SssPass {
     /// they change size).
     pub fn resize(&mut self, device: &wgpu::Device, inputs: &SssInputs<'_>) {
         let size = inputs.diffuse.size();
+        self.size = [size.width, size.height];
+        // The region is clamped to the new size.
+        self.uniforms = self.make_uniforms(device);
         let fetch = self.settings.fetch;
         // Compute steps write their output as a storage texture.
         let compute = fetch == SssFetch::Workgroup
@@ -399,7 +443,7 @@ impl SssPass {
                 bind_group: workgroup::bind_group(device, &parts().layout, &desc),
                 target: 0,
                 accum: false,
-                dispatch: Some(workgroup::dispatch(size.width, size.height, horizontal)),
+                dispatch: Some(horizontal),
             }
         };
         // Target indices: 0 = the diffuse input (written in place), then intermediates; an
@@ -560,12 +604,19 @@ impl SssPass {
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
         let Some(bound) = &self.bound else { return };
+        let [x0, y0, x1, y1] = self.region_px();
+        if x1 <= x0 || y1 <= y0 {
+            // No skin in view.
+            return;
+        }
+        let [w, h] = [x1 - x0, y1 - y0];
         if let Some((src, dst)) = &bound.copy {
             encoder.copy_texture_to_texture(src.as_image_copy(), dst.as_image_copy(), src.size());
         }
         for s in &bound.steps {
             let timer = TimedPass::begin(profiler, "sss", encoder);
-            if let Some([x, y]) = s.dispatch {
+            if let Some(horizontal) = s.dispatch {
+                let [x, y] = workgroup::dispatch(w, h, horizontal);
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("sss"),
@@ -593,6 +644,7 @@ impl SssPass {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
+                pass.set_scissor_rect(x0, y0, w, h);
                 pass.set_pipeline(self.pipelines.render(s.key));
                 pass.set_bind_group(0, &s.bind_group, &[]);
                 pass.draw(0..3, 0..1);

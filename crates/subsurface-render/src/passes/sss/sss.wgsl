@@ -25,6 +25,9 @@ struct SssUniform {
     seed: u32,            // jittered separable: 0 = horizontal pass, 1 = vertical
     widths: u32,          // first row of the separable taps' jitter half-widths (mm, in x)
     _pad0: u32,
+    // The pixels [x0, y0, x1, y1) the separable passes run on: every skin pixel and every tap
+    // it reads lies inside (SssPass::set_region); the pixels outside are left as they are.
+    region: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> u: SssUniform;

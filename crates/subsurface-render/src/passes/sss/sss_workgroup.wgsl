@@ -55,8 +55,13 @@ fn load_line(group: vec3<u32>, index: u32) -> Line {
     let size = extent();
     var line: Line;
     line.last = select(size.y, size.x, u.direction.x > 0.5) - 1;
-    line.across = group.y;
-    line.origin = i32(group.x * LINE_TILE);
+    if (u.direction.x > 0.5) {
+        line.across = u.region.y + group.y;
+        line.origin = i32(u.region.x + group.x * LINE_TILE);
+    } else {
+        line.across = u.region.x + group.y;
+        line.origin = i32(u.region.y + group.x * LINE_TILE);
+    }
     for (var k = index; k < LINE_SPAN; k += LINE_TILE) {
         let along = clamp(line.origin - LINE_APRON + i32(k), 0, line.last);
         line_texels[k] = textureLoad(packed_tex, line_texel(along, line), 0);
@@ -80,7 +85,9 @@ fn store_line(texel: vec2<i32>, sum: vec3<f32>, c: Centre) {
 fn separable_line(group: vec3<u32>, index: u32, jittered: bool) {
     let line = load_line(group, index);
     let along = line.origin + i32(index);
-    if (along > line.last) {
+    // The last stretch may run past the region: its pixels are not this pass's to write.
+    let end = i32(select(u.region.w, u.region.z, u.direction.x > 0.5));
+    if (along > line.last || along >= end) {
         return;
     }
     let c = centre_of(line_texels[u32(LINE_APRON) + index]);
