@@ -852,7 +852,7 @@ def cmd_render(a):
             if not info or not os.path.isfile(os.path.join(REFS, name + ".exr")):
                 continue
             worst = worst_rel_se(name)
-            if worst > a.refine_to and info["spp"] < a.max_spp:
+            if worst > a.refine_to and info["spp"] + info.get("pass_spp", a.pass_spp) <= a.max_spp:
                 todo.append((name, worst))
         if not todo:
             print(f"refinement: every reference within {100 * a.refine_to:.0f} % or at {a.max_spp} spp", flush=True)
@@ -863,13 +863,17 @@ def cmd_render(a):
             info = m["references"][name]
             spp = info["spp"]
             need = spp * (worst / a.refine_to) ** 2 * 1.1
-            add = max(spp, int(math.ceil((need - spp) / a.pass_spp)) * a.pass_spp)
-            add = min(add, a.max_spp - spp)
+            # The reference's own pass size: every pass of a merged image weighs the same.
+            pass_spp = info.get("pass_spp", a.pass_spp)
+            add = max(spp, int(math.ceil((need - spp) / pass_spp)) * pass_spp)
+            add = min(add, (a.max_spp - spp) // pass_spp * pass_spp)
+            if add <= 0:
+                continue
             seed = max(p["seed"] for p in info["parts"]) + 1
             out = os.path.join(REFS, name + ".exr")
             part = os.path.join(REFS, f".{name}.part{seed}.exr")
             merged = os.path.join(REFS, f".{name}.merged.exr")
-            secs = render_one(name, part, add, a.pass_spp, info["max_depth"], info["rr_depth"], seed=seed)
+            secs = render_one(name, part, add, pass_spp, info["max_depth"], info["rr_depth"], seed=seed)
             rc = merge_references.main([merged, f"{out}:{spp}", f"{part}:{add}"])
             if rc:
                 raise RuntimeError(f"{name}: merge failed")

@@ -18,7 +18,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::gpu_scene::{camera_uniform, world_per_mm};
-use crate::passes::overrides::Terms;
+use crate::passes::overrides::{Terms, bounce, lateral};
 use crate::scene::{LightKind, Scene};
 use crate::settings::{LateralPass, RenderSettings, SssMethod, TransmittanceMethod};
 use crate::uniforms::LightsUniform;
@@ -161,14 +161,14 @@ impl FramePlan {
         let lighting = LightingVariant {
             method: t.method.code(),
             bounce: match (bounce_ring, bounce_layer) {
-                (0, _) => 0,
-                (_, Some(_)) => 1,
-                (_, None) => 2,
+                (0, _) => bounce::NONE,
+                (_, Some(_)) => bounce::MAP,
+                (_, None) => bounce::GATHER,
             },
             lateral: match (diffusion_taps, lateral_downsample > 1) {
-                (false, _) => 0,
-                (true, true) => 1,
-                (true, false) => 2,
+                (false, _) => lateral::NONE,
+                (true, true) => lateral::MAP,
+                (true, false) => lateral::TAPS,
             },
             terms: Terms::of(settings),
         };

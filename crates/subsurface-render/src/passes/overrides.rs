@@ -14,6 +14,35 @@ pub const LATERAL_SOURCE: &str = "LATERAL_SOURCE";
 /// Fixes where a pipeline's pixels take the bounce from (`frame_plan::LightingVariant::bounce`).
 pub const BOUNCE_SOURCE: &str = "BOUNCE_SOURCE";
 
+/// The value an override is left at to follow the uniform at run time (`FOLLOW_UNIFORM` in
+/// ids.wgsl): the texture-space pass builds one pipeline for every frame shape.
+pub const FOLLOW_UNIFORM: u32 = 255;
+
+/// Values of `LATERAL_SOURCE` ([`crate::frame_plan::LightingVariant::lateral`]; `LATERAL_*`
+/// in ids.wgsl): where `diffusion` takes its lateral light from.
+pub mod lateral {
+    /// No lateral light (another method, or no taps).
+    pub const NONE: u32 = 0;
+    /// The lateral map (the lights' chords per pixel only where the map has no texel of the
+    /// pixel's surface).
+    pub const MAP: u32 = 1;
+    /// The taps per pixel.
+    pub const TAPS: u32 = 2;
+    /// The taps' sum given by the texel's lanes (the lateral map's compute evaluation).
+    pub const GIVEN: u32 = 3;
+}
+
+/// Values of `BOUNCE_SOURCE` ([`crate::frame_plan::LightingVariant::bounce`]; `BOUNCE_*` in
+/// ids.wgsl): where a pixel takes the bounce from.
+pub mod bounce {
+    /// No bounce.
+    pub const NONE: u32 = 0;
+    /// The lateral map's bounce layer.
+    pub const MAP: u32 = 1;
+    /// A gather per pixel (no map).
+    pub const GATHER: u32 = 2;
+}
+
 /// Which optional terms a pipeline evaluates ([`Terms`]).
 pub const DIFFUSION_TERMS: &str = "DIFFUSION_TERMS";
 
@@ -55,4 +84,64 @@ pub fn diffusion_whole(terms: Terms, lateral: f64) -> [(&'static str, f64); 3] {
         (LATERAL_SOURCE, lateral),
         (DIFFUSION_TERMS, f64::from(terms.0)),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::TransmittanceMethod;
+
+    /// The constants ids.wgsl declares, by name.
+    fn wgsl_ids() -> std::collections::HashMap<String, u32> {
+        let module = naga::front::wgsl::parse_str(include_str!("ids.wgsl")).unwrap();
+        module
+            .constants
+            .iter()
+            .map(|(_, c)| {
+                let value = match module.global_expressions[c.init] {
+                    naga::Expression::Literal(naga::Literal::U32(v)) => v,
+                    ref e => panic!("{:?}: not a u32 literal: {e:?}", c.name),
+                };
+                (c.name.clone().unwrap(), value)
+            })
+            .collect()
+    }
+
+    /// Every id the shaders compare against is the one the Rust side writes.
+    #[test]
+    fn shader_ids_match_the_rust_side() {
+        let ids = wgsl_ids();
+        let methods = [
+            ("TRANSMITTANCE_OFF", TransmittanceMethod::Off),
+            ("TRANSMITTANCE_PAPER", TransmittanceMethod::Paper),
+            ("TRANSMITTANCE_BEER", TransmittanceMethod::Beer),
+            ("TRANSMITTANCE_SEED_REPORT", TransmittanceMethod::SeedReport),
+            ("TRANSMITTANCE_TSM", TransmittanceMethod::Tsm),
+            ("TRANSMITTANCE_DIFFUSION", TransmittanceMethod::Diffusion),
+        ];
+        let mut expected: Vec<(&str, u32)> = methods.iter().map(|(n, m)| (*n, m.code())).collect();
+        expected.extend([
+            ("FOLLOW_UNIFORM", FOLLOW_UNIFORM),
+            ("LATERAL_NONE", lateral::NONE),
+            ("LATERAL_MAP", lateral::MAP),
+            ("LATERAL_TAPS", lateral::TAPS),
+            ("LATERAL_GIVEN", lateral::GIVEN),
+            ("BOUNCE_NONE", bounce::NONE),
+            ("BOUNCE_MAP", bounce::MAP),
+            ("BOUNCE_GATHER", bounce::GATHER),
+            ("TERM_BALLISTIC", Terms::BALLISTIC),
+            ("TERM_SINGLE_SCATTERING", Terms::SINGLE_SCATTERING),
+            ("TERM_SOURCE_SHIFT", Terms::SOURCE_SHIFT),
+        ]);
+        for (name, value) in &expected {
+            assert_eq!(ids.get(*name), Some(value), "{name} in ids.wgsl");
+        }
+        assert_eq!(
+            ids.len(),
+            expected.len(),
+            "ids.wgsl declares ids the test does not check"
+        );
+        // Every method has its id (a new method needs one).
+        assert_eq!(methods.len(), TransmittanceMethod::ALL.len());
+    }
 }

@@ -7,7 +7,7 @@
 // that the compiler drops the other methods' code: one shader for all of them made `paper`'s
 // lighting pass pay for `diffusion`'s taps and LUT reads it never ran (lavapipe, 640x360:
 // 117 ms against 77 specialized; on GPUs the unused branches still cost registers).
-override TRANSMITTANCE_METHOD: u32 = 255u;
+override TRANSMITTANCE_METHOD: u32 = FOLLOW_UNIFORM;
 
 // Where this pipeline's `diffusion` comes from (frame_plan.rs, `LightingVariant::lateral`): 0 per point
 // without lateral light (another method, or no taps), 1 the lateral map (shade reads every
@@ -20,7 +20,7 @@ override TRANSMITTANCE_METHOD: u32 = 255u;
 // pipeline per source, as for the method: the map's pipeline holds no tap loop, which llvmpipe
 // runs for every pixel once any pixel needs it (7 of the lighting pass's 117 ms at 640x360)
 // and a GPU pays for in registers.
-override LATERAL_SOURCE: u32 = 255u;
+override LATERAL_SOURCE: u32 = FOLLOW_UNIFORM;
 
 // LATERAL_SOURCE 3: the light's entry (`light_entry`) at the point `transmittance` is called
 // for, and the sum of `lateral_tap_sum` over all its taps, which the caller gathered before
@@ -29,7 +29,7 @@ var<private> given_entry: Entry;
 var<private> given_lateral: vec3<f32>;
 
 fn transmittance_method() -> u32 {
-    if (TRANSMITTANCE_METHOD == 255u) {
+    if (TRANSMITTANCE_METHOD == FOLLOW_UNIFORM) {
         return lights.transmittance;
     }
     return TRANSMITTANCE_METHOD;
@@ -178,7 +178,7 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     // viewer's soak test grew 18 % in ten cycles), while a bound that still reads a uniform
     // keeps the shader it compiled once (docs/lab/performance.md, "lavapipe's inlined uniforms").
     let taps = i32(lights.thickness_filter);
-    let texels = shadow_distance(light, sc, select(taps, min(taps, 1), LATERAL_SOURCE == 1u));
+    let texels = shadow_distance(light, sc, select(taps, min(taps, 1), LATERAL_SOURCE == LATERAL_MAP));
     let d_in = texels.x;
     if (d_in < 0.0) {
         return e;
@@ -190,7 +190,7 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     // (0.5 mm in the canonical scenes: +15 % of red diffusion through thick parts, 1.5x the
     // unscattered light through thin ones). The extensions measure from p itself and use the
     // shrunk point only to find the entry texel.
-    let measured_at = select(p, shrunk, transmittance_method() == 1u);
+    let measured_at = select(p, shrunk, transmittance_method() == TRANSMITTANCE_PAPER);
     let s_units = abs(light_distance(light.kind, light.position, light.direction, measured_at) - d_in);
     // Into the profile's millimetres: scene units per mm (sss width) times translucency.
     e.s_mm = s_units / (object.world_per_mm * object.translucency);
@@ -287,7 +287,7 @@ const SCATTER_STEPS: i32 = 8;
 // (docs/lab/performance.md); the thickness there is a single texel (light_entry).
 const OUTLINE_SCATTER_STEPS: i32 = 4;
 // An override, so that each pipeline's march has a constant trip count.
-override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == 1u);
+override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == LATERAL_MAP);
 const SCATTER_RANGE_MM: f32 = 8.0;
 
 fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>, s_mm: f32) -> vec3<f32> {
@@ -526,7 +526,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     out.ballistic = vec3<f32>(0.0);
     let method = transmittance_method();
     // 4 (translucent shadow maps) has its own path, tsm_transmittance.
-    if (method == 0u || method == 4u || method > 5u) {
+    if (method == TRANSMITTANCE_OFF || method == TRANSMITTANCE_TSM || method > TRANSMITTANCE_DIFFUSION) {
         return out;
     }
     // Where the method's own back-irradiance factor is zero (`diffusion`: a point the light
@@ -534,11 +534,11 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     // crosses: skip the thickness lookup and its N x N shadow-map loads. Every directly lit
     // pixel of a front-lit frame takes this exit.
     let facing = dot(n_vertex, l);
-    if ((method == 5u && facing > 0.0 && lit >= 1.0) || (method != 5u && facing >= 0.3)) {
+    if ((method == TRANSMITTANCE_DIFFUSION && facing > 0.0 && lit >= 1.0) || (method != TRANSMITTANCE_DIFFUSION && facing >= 0.3)) {
         return out;
     }
     var entry: Entry;
-    if (LATERAL_SOURCE == 3u) {
+    if (LATERAL_SOURCE == LATERAL_GIVEN) {
         entry = given_entry;
     } else {
         entry = light_entry(light, p, n_vertex);
@@ -549,20 +549,20 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     }
     var t = vec3<f32>(0.0);
     switch method {
-        case 1u: {
+        case TRANSMITTANCE_PAPER: {
             t = profile_transmittance(s_mm);
         }
-        case 2u: {
+        case TRANSMITTANCE_BEER: {
             // Green's Beer-Lambert attenuation exp(-sigma_t s): one layer, no colour shift
             // with depth beyond what sigma_t gives.
             t = exp(-object.extinction * s_mm);
         }
-        case 3u: {
+        case TRANSMITTANCE_SEED_REPORT: {
             // The ad-hoc falloff of 001_*, proportional to s^-0.6 (its constants are not
             // given; 0.15 makes 1 mm transmit about as much as the profile does).
             t = vec3<f32>(min(0.15 / pow(max(s_mm, 1e-3), 0.6), 1.0));
         }
-        case 5u: {
+        case TRANSMITTANCE_DIFFUSION: {
             // A point the light reaches directly is its own entry point: its light is the
             // diffuse term's, and adding T(~0) E through the wrap below doubled it along
             // every terminator (a front-lit sphere's shadow side read +23 % against the path
@@ -594,11 +594,11 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 // medium keeps the light in (a finger, a wedge), the lateral one where light
                 // finds a shorter way than the chord (a palm beside the finger roots). Each is
                 // low where the other holds; the larger one counts.
-                if (LATERAL_SOURCE >= 2u && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
+                if (LATERAL_SOURCE >= LATERAL_TAPS && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
                     let flux = lut_row(s_shape, DIFFUSION_RANGE_MM, FLUX_ROW);
                     let shape = select(vec3<f32>(0.0), exit / flux, flux > vec3<f32>(1e-7));
                     var lateral: vec3<f32>;
-                    if (LATERAL_SOURCE == 3u) {
+                    if (LATERAL_SOURCE == LATERAL_GIVEN) {
                         lateral = given_lateral * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
                     } else {
                         lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
@@ -607,7 +607,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 }
                 out.diffuse = diffuse * unlit;
                 var ballistic = vec3<f32>(0.0);
-                if (has_term(1u)) {
+                if (has_term(TERM_BALLISTIC)) {
                     ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
                 }
                 // Single scattering only where the surface faces away from the light: where it
@@ -615,7 +615,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 // onto the unblurred specular target (and a lit point's own single scattering
                 // is a reflection term this renderer does not model).
                 var single = vec3<f32>(0.0);
-                if (has_term(2u) && facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
+                if (has_term(TERM_SINGLE_SCATTERING) && facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
                     single = single_scattering(light, p, n_vertex, l, v, s_mm);
                 }
                 out.ballistic = (ballistic + single) * unlit;

@@ -16,7 +16,7 @@ use targets::{LateralSurface, ObjectRects, dispatch_origin_layout, lateral_compu
 
 use crate::frame_plan::{FramePlan, TRANSMITTED_LAYERS};
 use crate::gpu::object::GpuObject;
-use crate::passes::overrides::{Terms, diffusion_whole};
+use crate::passes::overrides::{Terms, diffusion_whole, lateral};
 use crate::passes::util;
 use crate::timing::TimedPass;
 
@@ -44,8 +44,8 @@ struct Compute<'a> {
 /// `LATERAL_SOURCE` of the raster passes and `cs_bounce`: `diffusion` whole, the taps
 /// included; and of `cs_transmitted`, whose taps' sum is gathered over the texel's lanes before
 /// `transmittance`.
-const WHOLE: f64 = 2.0;
-const SPREAD: f64 = 3.0;
+const WHOLE: f64 = lateral::TAPS as f64;
+const SPREAD: f64 = lateral::GIVEN as f64;
 
 /// `cs_transmitted`'s and `cs_bounce`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`),
 /// and the block of texels (across, down) a workgroup of 64 takes. Each texel waits out a

@@ -143,13 +143,13 @@ fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0)
 // lavapipe, which runs a loop's body for every pixel once some pixel enters it.
 // Each source has its own pipeline (frame_plan.rs, `LightingVariant::bounce`): 0 none, 1 the map, 2 a
 // gather per pixel; the default (the texture-space pass, which never calls this) keeps all.
-override BOUNCE_SOURCE: u32 = 255u;
+override BOUNCE_SOURCE: u32 = FOLLOW_UNIFORM;
 
 fn pixel_bounce(world: vec3<f32>, n_vertex: vec3<f32>, screen: ScreenSample) -> vec3<f32> {
-    if (BOUNCE_SOURCE == 0u || lights.bounce_ring == 0u) {
+    if (BOUNCE_SOURCE == BOUNCE_NONE || lights.bounce_ring == 0u) {
         return vec3<f32>(0.0);
     }
-    if (BOUNCE_SOURCE == 1u || (BOUNCE_SOURCE == 255u && lights.lateral_downsample > 1u)) {
+    if (BOUNCE_SOURCE == BOUNCE_MAP || (BOUNCE_SOURCE == FOLLOW_UNIFORM && lights.lateral_downsample > 1u)) {
         return bounce_from_map(lights.bounce_layer, screen);
     }
     return bounce_irradiance(world, n_vertex);
@@ -205,7 +205,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     s.specular = vec3<f32>(0.0);
     let count = min(lights.count, MAX_LIGHTS);
     // Translucent shadow maps are method 4's: a pipeline built for another leaves them out.
-    let tsm = with_tsm && (TRANSMITTANCE_METHOD == 255u || TRANSMITTANCE_METHOD == 4u);
+    let tsm = with_tsm && (TRANSMITTANCE_METHOD == FOLLOW_UNIFORM || TRANSMITTANCE_METHOD == TRANSMITTANCE_TSM);
     // `diffusion` from the lateral map: where the map holds the pixel's surface, one read
     // serves every light. Where it does not (an outline, whose outer pixels no texel centre
     // covers; a depth edge), each light's chord runs here (`transmittance`, without taps) and
@@ -213,7 +213,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     // view and the thin rim make an outline's transmitted light change within a texel, and the
     // nearest texel alone, lying further in, left the finger's light-side outline at -27 %
     // against the path tracer instead of -17 % (docs/lab/fidelity.md, finding 14).
-    let from_map = TRANSMITTANCE_METHOD == 5u && LATERAL_SOURCE == 1u;
+    let from_map = TRANSMITTANCE_METHOD == TRANSMITTANCE_DIFFUSION && LATERAL_SOURCE == LATERAL_MAP;
     var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
     if (from_map) {
         mapped = transmitted_from_map(screen);

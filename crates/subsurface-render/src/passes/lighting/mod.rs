@@ -29,13 +29,14 @@ use crate::gpu::object::GpuObject;
 use crate::passes::lateral_map::LateralMapPass;
 use crate::passes::maps;
 use crate::passes::overrides::{
-    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD,
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, lateral,
 };
 use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
 pub const SHADER: &str = concat!(
+    include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
     include_str!("lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
@@ -330,8 +331,13 @@ impl LightingPass {
     /// built the first time. Ignored where the current variant reads no map.
     fn set_taps_objects(&mut self, device: &wgpu::Device, plan: &FramePlan) {
         let key = self.pipelines[self.current].0;
-        self.taps = (key.lateral == 1 && plan.taps_objects.contains(&true))
-            .then(|| self.pipeline_index(device, LightingVariant { lateral: 2, ..key }));
+        self.taps = (key.lateral == lateral::MAP && plan.taps_objects.contains(&true)).then(|| {
+            let taps = LightingVariant {
+                lateral: lateral::TAPS,
+                ..key
+            };
+            self.pipeline_index(device, taps)
+        });
         self.taps_objects = plan.taps_objects.clone();
     }
 

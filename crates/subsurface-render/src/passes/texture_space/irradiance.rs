@@ -16,6 +16,7 @@ use crate::passes::util;
 use crate::timing::TimedPass;
 
 pub const SHADER: &str = concat!(
+    include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
     include_str!("../lighting/lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),

@@ -26,7 +26,7 @@ use crate::gpu::object::object_layout;
 use crate::material::MaterialOptics;
 use crate::passes::lighting::{self, RADIANCE_FORMAT};
 use crate::passes::overrides::{
-    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, Terms,
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, Terms, bounce, lateral,
 };
 use crate::passes::{fullscreen, transmittance, util};
 use crate::settings::{RenderSettings, TransmittanceMethod};
@@ -35,6 +35,7 @@ use crate::uniforms::ObjectUniform;
 
 pub const SHADER: &str = concat!(
     include_str!("../fullscreen.wgsl"),
+    include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
     include_str!("../lighting/lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
@@ -164,9 +165,12 @@ impl TransmittedLightPass {
         let taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
         let constants = [
             (TRANSMITTANCE_METHOD, f64::from(t.method.code())),
-            (LATERAL_SOURCE, if taps { 2.0 } else { 0.0 }),
+            (
+                LATERAL_SOURCE,
+                f64::from(if taps { lateral::TAPS } else { lateral::NONE }),
+            ),
             (DIFFUSION_TERMS, f64::from(Terms::of(settings).0)),
-            (BOUNCE_SOURCE, 0.0),
+            (BOUNCE_SOURCE, f64::from(bounce::NONE)),
         ];
         let target = Some(util::additive_target(RADIANCE_FORMAT));
         let pipeline = fullscreen::pipeline_with_constants(
