@@ -382,6 +382,25 @@ fn absurd_instance_counts_meet_the_work_budget() {
         start.elapsed()
     );
     assert!(!dir.join("o.png").exists());
+    // The issue's own file: 99,000 instances of one quad at the default size. Tangents were
+    // generated over the whole model, where mikktspace welded the instances' identical corners
+    // and ran for minutes before the budget could answer.
+    std::fs::write(dir.join("many.glb"), glb_quad(0.05, 99_000, 4)).unwrap();
+    let start = Instant::now();
+    let e = error_line(&subsurface(
+        &["render", "--model", "many.glb", "-o", "o.png"],
+        &dir,
+    ));
+    assert!(
+        e.contains("(198000 triangles)") && e.contains("work budget"),
+        "{e}"
+    );
+    assert!(
+        start.elapsed() < Duration::from_secs(60),
+        "{:?}",
+        start.elapsed()
+    );
+    assert!(!dir.join("o.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -187,7 +187,6 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
         indices: Vec::with_capacity(total_i),
         missing_uvs: None,
     };
-    let mut all_have_tangents = true;
     let mut best_material: Option<(usize, gltf::Material)> = None;
     let mut dropped = 0;
     for part in &parts {
@@ -220,9 +219,14 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
                 })
                 .collect()
         });
-        let (part_mesh, has_tangents, d) =
+        let (mut part_mesh, has_tangents, d) =
             read_part(part, &buffers, skin_mats.as_deref(), name, &mut warnings).map_err(err)?;
-        all_have_tangents &= has_tangents;
+        // Per primitive, as glTF defines tangents: over the whole model, mikktspace welds the
+        // identical corners of every instance of a primitive into one vertex group, and 99,000
+        // instances of one quad kept it busy for minutes.
+        if !has_tangents {
+            part_mesh.generate_tangents();
+        }
         dropped += d;
         let tris = part_mesh.triangle_count();
         if best_material.as_ref().is_none_or(|(t, _)| tris > *t) {
@@ -265,9 +269,6 @@ fn load_gltf_impl(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<GltfM
     }
     if dropped > 0 {
         warnings.push(format!("{name}: dropped {dropped} zero-area triangle(s)"));
-    }
-    if !all_have_tangents {
-        mesh.generate_tangents();
     }
 
     let mut model = GltfModel {
