@@ -61,9 +61,11 @@ fn main() -> ExitCode {
         Err(e) => return clap_exit(&e),
     };
     // wgpu_hal reports adapters it could not open (e.g. EGL without a display) as errors
-    // even when another backend works; they are noise unless debugging (-vv).
+    // even when another backend works; they are noise unless debugging (-vv). winit's X11
+    // backend warns about properties a headless X server lacks (XSETTINGS, a 0 mm screen):
+    // noise too, and it came before the viewer's one `error:` line.
     let level = match cli.verbose {
-        0 => "warn,wgpu_hal=off",
+        0 => "warn,wgpu_hal=off,winit=error",
         1 => "info,wgpu_hal=off,naga=warn,wgpu_core=warn",
         _ => "debug",
     };

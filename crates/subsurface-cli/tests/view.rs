@@ -322,6 +322,28 @@ fn no_display_is_a_one_line_error() {
     assert!(!err.contains("panicked") && !err.contains(".rs:"), "{err}");
 }
 
+/// An error the viewer meets after its window opened (here the screenshot's write) is still
+/// the one line on stderr: no warnings of the windowing system before it.
+#[test]
+fn errors_after_the_window_opens_are_one_line() {
+    let dir = tempdir("late");
+    let _one_at_a_time = WINDOW.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut w) = windowed() else { return };
+    let out = w
+        .command
+        .arg("view")
+        .args(["--width", W, "--height", H, "--frames", "2"])
+        .args(["--screenshot", "/dev/full"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].starts_with("error: /dev/full"), "{err}");
+}
+
 /// The debug views added for tuning transmittance and texture space: the window shows what
 /// `render --view` writes.
 #[test]
