@@ -7,8 +7,9 @@
 //!
 //! 1. [`ShadowEntryPass`]: the skin's shadow maps (light distance, entry normal) made from
 //!    the program's own z-buffer shadow maps;
-//! 2. [`TransmittedLightPass`]: light through thin parts, added to the diffuse and specular
-//!    targets;
+//! 2. [`TransmittedLightPass`]: light through thin parts, and the bounce from the lit surfaces
+//!    around (gathered from a [`FluxPyramid`] of the skin's shadow maps where the settings'
+//!    `bounce.ring` is above 0), added to the diffuse and specular targets;
 //! 3. [`SssPass`]: the screen-space blur of the diffuse light, skin pixels only;
 //!
 //! and tone-maps with [`ToneMapPass`]. It writes `OUT_DIR/skin_in_your_renderer.png` and,
@@ -33,6 +34,7 @@ use wgpu::util::DeviceExt;
 use subsurface_render::gpu_scene::{camera_uniform, object_uniform, world_per_mm};
 use subsurface_render::lights::light_setup;
 use subsurface_render::material::{MaterialCache, ProfileTable};
+use subsurface_render::passes::bounce::FluxPyramid;
 use subsurface_render::passes::lighting::{self, ShadowMaps};
 use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};
 use subsurface_render::passes::sss::{SssInputs, SssPass};
@@ -242,15 +244,14 @@ struct MaterialData {
 }
 
 /// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
-/// taps per pixel (the lateral map is a lower-rate evaluation inside our renderer), without
-/// the bounce between surfaces and the diffusion source's shadow shift (our lighting pass's
-/// terms, which a caller's forward pass does not have).
+/// taps and the bounce gathered per pixel (the lateral map is a lower-rate evaluation inside
+/// our renderer), and without the diffusion source's shadow shift (a term of our lighting
+/// pass's reflected light, which a caller's forward pass computes its own way).
 pub fn example_settings(scene: &Scene, width: u32, height: u32) -> RenderSettings {
     let mut s = scene.desc.render.clone();
     s.width = width;
     s.height = height;
     s.transmittance.lateral_texel_mm = 0.0;
-    s.bounce.ring = 0;
     s.sss.source_shift = false;
     s
 }
@@ -288,9 +289,9 @@ pub fn render(
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
     let setup = light_setup(scene, settings)?;
     let mut lights_uniform: LightsUniform = setup.uniform;
-    // No lateral map and no bounce: the skin passes below run their taps per pixel.
+    // No lateral map: the skin passes below run their taps and the bounce's gather per pixel.
     lights_uniform.lateral_downsample = 1;
-    lights_uniform.bounce_ring = 0;
+    lights_uniform.bounce_ring = settings.bounce.ring;
 
     // The program's own materials and meshes.
     let mut cache = MaterialCache::default();
@@ -674,10 +675,22 @@ pub fn render(
         uniform(bytemuck::bytes_of(&lights_uniform)),
     );
     let tsm = maps::dummy_tsm_view(device);
+    // The bounce's senders: every texel of the skin's shadow maps (a reflective shadow map).
+    let flux = settings.bounce.enabled().then(|| {
+        FluxPyramid::new(
+            ctx,
+            entry.atlas_view(),
+            &setup.layers,
+            atlas,
+            &lights_uniform,
+        )
+    });
     let shadow = ShadowMaps {
         atlas: entry.atlas_view(),
         depth: &shadow_array,
-        flux: None,
+        flux: flux
+            .as_ref()
+            .map(|f| [&f.position_view, &f.normal_view, &f.spread_view]),
     };
     let frame = lighting::frame_bind_group(
         device,
@@ -695,6 +708,9 @@ pub fn render(
     let gbuffer = transmitted.bind_gbuffer(device, &gbuffer, view_proj);
     if skin {
         entry.encode(&mut encoder, None);
+        if let Some(flux) = &flux {
+            flux.encode(&mut encoder, None);
+        }
         transmitted.encode(
             &mut encoder,
             &frame,

@@ -11,24 +11,49 @@ mod example;
 
 use subsurface_render::{RenderOptions, Renderer, Scene};
 
+/// The default frame (the medium preset: no bounce).
 #[test]
 fn skin_in_your_renderer_matches_the_renderer() {
     let Some(ctx) = common::context() else { return };
     let scene = Scene::default_scene();
     let settings = example::example_settings(&scene, 320, 180);
-    let theirs = example::render(&ctx, &scene, &settings, true).unwrap();
-    let without = example::render(&ctx, &scene, &settings, false).unwrap();
+    check_against_renderer(&ctx, &scene, &settings, "medium");
+}
+
+/// The high preset: the bounce between the fingers and all of transmittance's terms.
+#[test]
+fn skin_in_your_renderer_matches_the_renderer_with_the_bounce() {
+    let Some(ctx) = common::context() else { return };
+    let mut scene = Scene::default_scene();
+    scene
+        .desc
+        .set_quality(subsurface_render::settings::Quality::High)
+        .unwrap();
+    let settings = example::example_settings(&scene, 320, 180);
+    assert!(settings.bounce.ring > 0);
+    check_against_renderer(&ctx, &scene, &settings, "high");
+}
+
+fn check_against_renderer(
+    ctx: &subsurface_render::GpuContext,
+    scene: &Scene,
+    settings: &subsurface_render::RenderSettings,
+    name: &str,
+) {
+    let theirs = example::render(ctx, scene, settings, true).unwrap();
+    let without = example::render(ctx, scene, settings, false).unwrap();
     let options = RenderOptions {
         settings: settings.clone(),
         ..Default::default()
     };
-    let mut renderer = Renderer::new(&ctx, &scene, options).unwrap();
+    let mut renderer = Renderer::new(ctx, scene, options).unwrap();
     let ours = renderer.render().unwrap().image;
     let strength = renderer.read_sss().unwrap();
     let out = common::output_dir();
-    for (name, image) in [("ours", &ours), ("theirs", &theirs), ("without", &without)] {
+    let tag = name;
+    for (which, image) in [("ours", &ours), ("theirs", &theirs), ("without", &without)] {
         image
-            .save(out.join(format!("skin_in_your_renderer.{name}.png")))
+            .save(out.join(format!("skin_in_your_renderer.{tag}.{which}.png")))
             .unwrap();
     }
     let (mean, p95, heat) = common::flip(&ours, &theirs);
@@ -38,7 +63,7 @@ fn skin_in_your_renderer_matches_the_renderer() {
     let skin_flip = common::masked_mean(&common::flip_errors(&ours, &theirs), is_skin);
     let skin_flip_without = common::masked_mean(&common::flip_errors(&ours, &without), is_skin);
     eprintln!(
-        "FLIP against Renderer: mean {mean:.4}, p95 {p95:.4}, on skin {skin_flip:.4}; \
+        "{tag}: FLIP against Renderer: mean {mean:.4}, p95 {p95:.4}, on skin {skin_flip:.4}; \
          without the skin passes on skin {skin_flip_without:.4}"
     );
     // Skin pixels: the skin passes change them; nothing else changes.
@@ -63,7 +88,7 @@ fn skin_in_your_renderer_matches_the_renderer() {
     );
     assert!(
         mean < 0.01 && skin_flip < 0.04,
-        "FLIP against Renderer: mean {mean:.4}, on skin {skin_flip:.4}"
+        "{tag}: FLIP against Renderer: mean {mean:.4}, on skin {skin_flip:.4}"
     );
     assert!(
         skin_flip_without > 4.0 * skin_flip,

@@ -14,8 +14,11 @@
 //! - group 2, [`SkinGBuffer`]: linear depth, the vertex normal, the albedo and the SSS
 //!   pass's per-pixel medium row.
 //!
-//! `diffusion`'s lateral taps run per pixel here (the lateral map, a lower-rate evaluation, is
-//! our renderer's), and the bounce between surfaces is not part of the pass.
+//! With `bounce.ring > 0` the pass also adds the bounce, the light the lit surfaces around
+//! send across the air, gathered per pixel from a [`crate::passes::bounce::FluxPyramid`] built
+//! on the skin's shadow maps (given to group 0 as [`crate::passes::lighting::ShadowMaps::flux`];
+//! the `LightsUniform`'s `bounce_ring` and `bounce_cell_mm` set). `diffusion`'s lateral taps
+//! run per pixel here too (the lateral map, a lower-rate evaluation, is our renderer's).
 
 use glam::Mat4;
 use wgpu::util::DeviceExt;
@@ -129,11 +132,13 @@ pub struct TransmittedLightPass {
     frame_layout: wgpu::BindGroupLayout,
     gbuffer_layout: wgpu::BindGroupLayout,
     method: TransmittanceMethod,
+    bounce: bool,
 }
 
 impl TransmittedLightPass {
-    /// The pass for `settings`' transmittance (method, lateral taps, terms), drawing into
-    /// `RADIANCE_FORMAT` (`Rgba16Float`) diffuse and specular targets.
+    /// The pass for `settings`' transmittance (method, lateral taps, terms) and bounce (on where
+    /// `bounce.ring > 0`), drawing into `RADIANCE_FORMAT` (`Rgba16Float`) diffuse and specular
+    /// targets.
     pub fn new(device: &wgpu::Device, settings: &RenderSettings) -> Self {
         let t = &settings.transmittance;
         let module = util::wgsl_module(device, "transmitted_light.wgsl", SHADER);
@@ -170,7 +175,14 @@ impl TransmittedLightPass {
                 f64::from(if taps { lateral::TAPS } else { lateral::NONE }),
             ),
             (DIFFUSION_TERMS, f64::from(Terms::of(settings).0)),
-            (BOUNCE_SOURCE, f64::from(bounce::NONE)),
+            (
+                BOUNCE_SOURCE,
+                f64::from(if settings.bounce.enabled() {
+                    bounce::GATHER
+                } else {
+                    bounce::NONE
+                }),
+            ),
         ];
         let target = Some(util::additive_target(RADIANCE_FORMAT));
         let pipeline = fullscreen::pipeline_with_constants(
@@ -186,6 +198,7 @@ impl TransmittedLightPass {
             frame_layout,
             gbuffer_layout,
             method: t.method,
+            bounce: settings.bounce.enabled(),
         }
     }
 
@@ -221,9 +234,9 @@ impl TransmittedLightPass {
         )
     }
 
-    /// Adds the transmitted light of every medium into `diffuse` and `specular` (both
-    /// `RADIANCE_FORMAT`, loaded and stored). Nothing is drawn for `off` and for translucent
-    /// shadow maps, which need texture-space diffusion.
+    /// Adds the transmitted light (and the bounce) of every medium into `diffuse` and
+    /// `specular` (both `RADIANCE_FORMAT`, loaded and stored). Nothing is drawn without a
+    /// bounce for `off` and for translucent shadow maps, which need texture-space diffusion.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -233,10 +246,12 @@ impl TransmittedLightPass {
         [diffuse, specular]: [&wgpu::TextureView; 2],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        if matches!(
-            self.method,
-            TransmittanceMethod::Off | TransmittanceMethod::Tsm
-        ) {
+        if !self.bounce
+            && matches!(
+                self.method,
+                TransmittanceMethod::Off | TransmittanceMethod::Tsm
+            )
+        {
             return;
         }
         let timer = TimedPass::begin(profiler, "transmitted light", encoder);

@@ -2,6 +2,8 @@
 // pixel from a caller's G-buffer rather than inside our lighting pass, and added to the
 // caller's diffuse target before the SSS blur (000_*: transmitted light joins the reflected
 // light and is blurred with it) and, for `diffusion`'s unscattered part, to its specular target.
+// With BOUNCE_SOURCE = BOUNCE_GATHER, also the bounce (bounce.wgsl): light from the lit
+// surfaces around, which enters and diffuses as the lights' own does.
 // Drawn once per medium: group 1 is the medium's (`object`), and each draw keeps the pixels of
 // its own profile row.
 
@@ -45,7 +47,9 @@ fn fs_deferred_transmitted(@builtin(position) frag: vec4<f32>) -> TransmittedOut
     let v = normalize(camera.position - world);
     var diffuse = vec3<f32>(0.0);
     var specular = vec3<f32>(0.0);
-    let count = min(lights.count, MAX_LIGHTS);
+    // Without a method that transmits here, the pass draws for the bounce alone.
+    let transmits = TRANSMITTANCE_METHOD != TRANSMITTANCE_OFF && TRANSMITTANCE_METHOD != TRANSMITTANCE_TSM;
+    let count = select(0u, min(lights.count, MAX_LIGHTS), transmits);
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.kind, light.position, light.direction, world);
@@ -56,6 +60,9 @@ fn fs_deferred_transmitted(@builtin(position) frag: vec4<f32>) -> TransmittedOut
         let t = transmittance(light, world, n_vertex, l, v, shadow_factor(light, world));
         diffuse += radiance * t.diffuse;
         specular += radiance * t.ballistic;
+    }
+    if (BOUNCE_SOURCE == BOUNCE_GATHER) {
+        diffuse += bounce_irradiance(world, n_vertex);
     }
     var out: TransmittedOut;
     out.diffuse = vec4<f32>(min(albedo * diffuse, vec3<f32>(HALF_MAX)), 1.0);
