@@ -199,9 +199,9 @@ impl FluxPyramid {
         let in_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("flux level below"),
             entries: &[
-                util::float_texture_entry(7, compute, false, array),
-                util::float_texture_entry(8, compute, false, array),
-                util::float_texture_entry(9, compute, false, array),
+                util::float_texture_entry(0, compute, false, array),
+                util::float_texture_entry(1, compute, false, array),
+                util::float_texture_entry(2, compute, false, array),
             ],
         });
         let module = util::wgsl_module(device, "bounce_build.wgsl", SHADER);
@@ -256,9 +256,9 @@ impl FluxPyramid {
                     "flux level below",
                     &in_layout,
                     [
-                        (7, wgpu::BindingResource::TextureView(&p)),
-                        (8, wgpu::BindingResource::TextureView(&n)),
-                        (9, wgpu::BindingResource::TextureView(&s)),
+                        (0, wgpu::BindingResource::TextureView(&p)),
+                        (1, wgpu::BindingResource::TextureView(&n)),
+                        (2, wgpu::BindingResource::TextureView(&s)),
                     ],
                 )
             })

@@ -6,14 +6,6 @@
 // and by its rough boundary's reflection. The cells are not tested for visibility: a shadow
 // map cannot tell whether two lit points see each other (docs/lab/fidelity.md, finding 11).
 
-// Per cell: rgb = sum of flux x position, a = the flux (per unit of the light's colour: spot
-// falloff x the texel's solid angle, or its area across a directional beam).
-@group(0) @binding(6) var flux_position: texture_2d_array<f32>;
-// rgb = sum of flux x normal (a cell's cosines toward a direction add up linearly while none
-// is negative), a = sum of flux over the cosine of incidence (what its boundary reflects).
-@group(0) @binding(7) var flux_normal: texture_2d_array<f32>;
-// r = sum of flux x squared distance from the light's origin (`position` of its uniform).
-@group(0) @binding(8) var flux_spread: texture_2d_array<f32>;
 
 // The irradiance (the receiver's albedo not yet applied) that the lit surfaces send the point
 // `p` of vertex normal `n`, from every light with a spot or directional shadow map. Each level

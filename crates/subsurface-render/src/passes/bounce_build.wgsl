@@ -23,11 +23,10 @@ struct FluxLayers {
 @group(0) @binding(3) var out_normal: texture_storage_2d_array<rgba32float, write>;
 @group(0) @binding(4) var out_spread: texture_storage_2d_array<r32float, write>;
 
-// The level below, for `downsample` (group 1 past common.wgsl's object bindings, which the
-// build never reads).
-@group(1) @binding(7) var in_position: texture_2d_array<f32>;
-@group(1) @binding(8) var in_normal: texture_2d_array<f32>;
-@group(1) @binding(9) var in_spread: texture_2d_array<f32>;
+// The level below, for `downsample`.
+@group(1) @binding(0) var in_position: texture_2d_array<f32>;
+@group(1) @binding(1) var in_normal: texture_2d_array<f32>;
+@group(1) @binding(2) var in_spread: texture_2d_array<f32>;
 
 // Texels read per side of a finest cell, every `base / READS` texel.
 const READS: i32 = 4;

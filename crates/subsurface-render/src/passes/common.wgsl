@@ -1,4 +1,5 @@
-// Shared declarations, prepended to every scene pass (shadow, lighting).
+// Shared declarations, prepended to every scene pass (shadow, lighting): the lights, the uniform
+// blocks' structs (mirrored in uniforms.rs), light distances and the entry normal's encoding.
 
 const MAX_LIGHTS: u32 = 8u;
 const KIND_POINT: f32 = 0.0;
@@ -73,22 +74,6 @@ struct Object {
     boundary_fit: array<vec4<f32>, 2>,
 };
 
-@group(1) @binding(0) var<uniform> object: Object;
-@group(1) @binding(1) var albedo_map: texture_2d<f32>;
-@group(1) @binding(2) var normal_map: texture_2d<f32>;
-@group(1) @binding(3) var specular_map: texture_2d<f32>;
-@group(1) @binding(4) var material_sampler: sampler;
-// T(s) of the object's material profile (000_*, equation 9), s in mm over the LUT range.
-@group(1) @binding(5) var transmittance_lut: texture_2d<f32>;
-@group(1) @binding(6) var lut_sampler: sampler;
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-    @location(3) tangent: vec4<f32>,
-};
-
 // The distance stored in shadow maps: Euclidean distance to point and spot lights, distance
 // along the light direction for directional lights. Linear, in scene units, so thickness
 // (Jimenez et al. 2010, Figure 7) is a plain difference of two such distances.
@@ -106,20 +91,6 @@ fn light_direction(kind: f32, origin: vec3<f32>, light_dir: vec3<f32>, p: vec3<f
         return -light_dir;
     }
     return normalize(origin - p);
-}
-
-// Object space to world: every pass that draws meshes places them the same way.
-fn world_position(v: VertexIn) -> vec4<f32> {
-    return object.model * vec4<f32>(v.position, 1.0);
-}
-
-// The shading frame in world space (normal and tangent; w keeps the bitangent sign).
-fn world_normal(v: VertexIn) -> vec3<f32> {
-    return (object.normal_matrix * vec4<f32>(v.normal, 0.0)).xyz;
-}
-
-fn world_tangent(v: VertexIn) -> vec4<f32> {
-    return vec4<f32>((object.model * vec4<f32>(v.tangent.xyz, 0.0)).xyz, v.tangent.w);
 }
 
 // The shadow map's second channel: the normal of the surface the light sees, octahedral with

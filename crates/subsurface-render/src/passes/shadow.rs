@@ -10,7 +10,11 @@ use crate::lights::ShadowLayer;
 use crate::passes::util;
 use crate::uniforms::{ShadowViewUniform, mat, v4};
 
-pub const SHADER: &str = concat!(include_str!("common.wgsl"), include_str!("shadow.wgsl"));
+pub const SHADER: &str = concat!(
+    include_str!("common.wgsl"),
+    include_str!("bindings/object.wgsl"),
+    include_str!("shadow.wgsl")
+);
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// All shadow maps ([`util::LayeredPass::atlas`]): one layer per spot/directional light, six

@@ -2,9 +2,6 @@
 // which shadow-map layer and texel a point projects to, percentage-closer filtering through
 // comparison gathers, and the shadow of the diffusion source that oblique light feeds.
 
-// The shadow maps' z-buffer, for percentage-closer filtering in the texture unit.
-@group(0) @binding(4) var shadow_depth: texture_depth_2d_array;
-@group(0) @binding(5) var shadow_compare: sampler_comparison;
 
 // Point lights keep six layers in the order +X, -X, +Y, -Y, +Z, -Z (see shadow.rs).
 fn cube_face(d: vec3<f32>) -> u32 {

@@ -4,9 +4,6 @@
 //   2: linear view depth in scene units (the blur width is divided by it)
 //   3: SSS strength (0 = not skin), scene units per profile millimetre, profile row
 
-@group(0) @binding(0) var<uniform> camera: Camera;
-@group(0) @binding(1) var<uniform> lights: Lights;
-@group(0) @binding(2) var shadow_atlas: texture_2d_array<f32>;
 
 struct LitVarying {
     // Invariant: the depth pre-pass and the lighting pass must compute bit-identical depths
@@ -112,9 +109,6 @@ struct TextureSpace {
 // The widest blurred Gaussian alone: the back-side irradiance that translucent shadow maps read.
 @group(2) @binding(2) var ts_widest: texture_2d<f32>;
 @group(2) @binding(3) var ts_sampler: sampler;
-// Translucent shadow maps: the (u, v) of the surface nearest each light, one layer per shadow
-// layer (-1 where nothing was drawn).
-@group(0) @binding(3) var tsm_atlas: texture_2d_array<f32>;
 
 // `diffusion`'s transmitted light at reduced resolution (lateral_map/targets.rs, `LateralTargets`):
 // layer 0 its diffuse part, layer 1 its unscattered and singly scattered part, every light's

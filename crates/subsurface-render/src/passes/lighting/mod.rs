@@ -10,8 +10,9 @@
 //! first and the lighting pass reads `diffusion`'s transmitted light and the bounce from it
 //! once per pixel, with a pipeline that holds no taps of its own.
 //!
-//! Group 0 (camera, lights, shadow maps, translucent shadow maps, flux pyramid) is built by
-//! [`frame_layout`]; group 1 is the object's (`gpu::object::object_layout`), group 2 the
+//! Group 0 (camera, lights, shadow maps, translucent shadow maps, flux pyramid; declared in
+//! bindings/frame.wgsl) is built by [`frame_layout`]; group 1 is the object's
+//! (`gpu::object::object_layout`, bindings/object.wgsl), group 2 the
 //! object's texture-space maps ([`maps::maps_layout`]), group 3 the lateral map
 //! ([`screen_layout`]). The texture-space pass draws its UV-space irradiance with the same
 //! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_lateral_map`].
@@ -38,6 +39,8 @@ use crate::uniforms::{CameraUniform, LightsUniform};
 pub const SHADER: &str = concat!(
     include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
+    include_str!("../bindings/frame.wgsl"),
+    include_str!("../bindings/object.wgsl"),
     include_str!("lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
     include_str!("../transmittance.wgsl"),

@@ -18,6 +18,8 @@ use crate::timing::TimedPass;
 pub const SHADER: &str = concat!(
     include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
+    include_str!("../bindings/frame.wgsl"),
+    include_str!("../bindings/object.wgsl"),
     include_str!("../lighting/lighting.wgsl"),
     include_str!("../shadow_lookup.wgsl"),
     include_str!("../transmittance.wgsl"),

@@ -13,8 +13,12 @@ use crate::uniforms::{TsmViewUniform, mat};
 
 pub use crate::passes::maps::{TSM_FORMAT, dummy_tsm_view};
 
-/// common.wgsl (`Object`, `VertexIn`) and tsm.wgsl.
-pub const SHADER: &str = concat!(include_str!("../common.wgsl"), include_str!("tsm.wgsl"));
+/// common.wgsl, bindings/object.wgsl (`object`, `VertexIn`) and tsm.wgsl.
+pub const SHADER: &str = concat!(
+    include_str!("../common.wgsl"),
+    include_str!("../bindings/object.wgsl"),
+    include_str!("tsm.wgsl")
+);
 
 /// The (u, v) of the surface nearest each light, one layer per shadow layer, at the shadow
 /// atlas's size: rendered as a second pass over the same layers ("tsm").

@@ -1,4 +1,4 @@
-// Translucent shadow maps: appended to common.wgsl (`Object`, `VertexIn`). Each shadow layer
+// Translucent shadow maps: appended to common.wgsl and bindings/object.wgsl (`object`, `VertexIn`). Each shadow layer
 // is rendered a second time storing the (u, v) of the surface nearest the light.
 
 struct TsmView {
