@@ -57,7 +57,7 @@ pub fn object_uniform(
         // The caller's: the object's place in its draw list (`upload_objects`).
         index: 0,
         _pad: 0.0,
-        scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
+        reduced_scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
         boundary_fit: boundary_fit(m.roughness, optics.dipole.eta),
     }

@@ -62,7 +62,7 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     uniform.normal_shrink = transmittance.normal_shrink;
     uniform.thickness_filter = transmittance.thickness_filter;
     uniform.lateral_taps = transmittance.lateral_taps;
-    uniform.scattering = u32::from(settings.sss.method != crate::settings::SssMethod::None);
+    uniform.sss_runs = u32::from(settings.sss.method != crate::settings::SssMethod::None);
     uniform.bounce_cell_mm = settings.bounce.cell_mm;
     let mut layers = Vec::new();
     for (i, l) in scene.desc.lights.iter().enumerate() {

@@ -60,7 +60,7 @@ pub struct LightsUniform {
     pub normal_shrink: f32,
     /// 1 when subsurface scattering runs (any method but `none`): the diffuse light's shadow
     /// is looked up where the refracted light feeds the diffusion source.
-    pub scattering: u32,
+    pub sss_runs: u32,
     /// `diffusion`: shadow-map taps of the lit surface around the chord (0: the chord alone).
     pub lateral_taps: u32,
     /// 1: the lateral taps run per pixel; N > 1: the lighting pass reads them from the lateral
@@ -111,7 +111,7 @@ pub struct ObjectUniform {
     pub index: u32,
     pub _pad: f32,
     /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
-    pub scattering: [f32; 3],
+    pub reduced_scattering: [f32; 3],
     pub _pad2: f32,
     /// The rough boundary's transmittance against the cosine, as a degree-7 polynomial:
     /// coefficients 0..4, 4..8 (`subsurface_profile::specular::rough_transmittance_fit`).
@@ -260,7 +260,7 @@ mod layout_tests {
             thickness_view,
             ambient,
             normal_shrink,
-            scattering,
+            sss_runs,
             lateral_taps,
             lateral_downsample,
             bounce_layer,
@@ -287,7 +287,7 @@ mod layout_tests {
             eta,
             lateral_decay,
             index,
-            scattering,
+            reduced_scattering,
             boundary_fit,
         });
         assert_same("Object", object, size_of::<ObjectUniform>());

@@ -1,5 +1,6 @@
 // The light one lit part of the skin sends another across the air (lighting/mod.rs puts this file
-// after transmittance.wgsl): gathered from the flux pyramid of each light's shadow map that
+// after transmittance.wgsl; the gather, the lateral map's bounce pass `fs_bounce` and a pixel's
+// bounce `pixel_bounce` are all here): gathered from the flux pyramid of each light's shadow map that
 // bounce_build.wgsl sums (a reflective shadow map, Dachsbacher and Stamminger 2005, summed
 // into cells so that a few hundred reads cover the whole map). Every cell sends on what the
 // light delivered to it: diffusely (the medium's albedo, through the flux-weighted normal sum)
@@ -191,4 +192,32 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
     // a texel: it takes the texel nearest its depth, up to 16 tolerances (14 mm for skin1),
     // less than a finger lies in front of a palm.
     return select(vec3<f32>(0.0), nearest.rgb, nearest.w < 16.0 * tolerance);
+}
+
+// The bounce pass (passes::bounce): the light the lit surfaces send each texel's surface
+// across the air, gathered from the flux pyramid once per texel of the lateral map's reduced
+// grid, as the lateral taps are: it changes over millimetres. a = the texel's view depth.
+@fragment
+fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let depth = dot(in.world - camera.position, camera.forward);
+    return vec4<f32>(bounce_irradiance(in.world, oriented_normal(in, front)), depth);
+}
+
+// The bounce at the pixel: interpolated from the lateral map's bounce layer on the pixel's own
+// surface; gathered here only where there is no map (the skin too small on screen for one).
+// Where the map has no texel of the pixel's surface (an outline, a depth edge) the pixel takes
+// none: gathering there per pixel, like the lateral taps, doubled the lighting pass on
+// lavapipe, which runs a loop's body for every pixel once some pixel enters it.
+// Each source has its own pipeline (frame_plan.rs, `LightingVariant::bounce`): 0 none, 1 the map, 2 a
+// gather per pixel; the default (the texture-space pass, which never calls this) keeps all.
+override BOUNCE_SOURCE: u32 = FOLLOW_UNIFORM;
+
+fn pixel_bounce(world: vec3<f32>, n_vertex: vec3<f32>, screen: ScreenSample) -> vec3<f32> {
+    if (BOUNCE_SOURCE == BOUNCE_NONE || lights.bounce_ring == 0u) {
+        return vec3<f32>(0.0);
+    }
+    if (BOUNCE_SOURCE == BOUNCE_MAP || (BOUNCE_SOURCE == FOLLOW_UNIFORM && lights.lateral_downsample > 1u)) {
+        return bounce_from_map(lights.bounce_layer, screen);
+    }
+    return bounce_irradiance(world, n_vertex);
 }

@@ -39,7 +39,7 @@ struct Lights {
     thickness_view: u32,   // 1: write the thickness instead of diffuse (debug view)
     ambient: vec3<f32>,
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
-    scattering: u32,       // 1: subsurface scattering runs (source_shadow in lighting.wgsl)
+    sss_runs: u32,         // 1: subsurface scattering runs (source_shadow in shadow_lookup.wgsl)
     lateral_taps: u32,     // diffusion: shadow-map taps of the lit surface around the chord
     lateral_downsample: u32, // > 1: the taps are read from the lateral map at 1/N resolution
     bounce_layer: u32,     // the lateral map's layer holding the bounce (bounce.wgsl)
@@ -68,7 +68,7 @@ struct Object {
     eta: f32,              // relative index of refraction of the boundary
     lateral_decay: f32,    // the medium's slowest decay rate, 1/mm (spreads the lateral taps)
     index: u32,            // in the frame's draw list (lateral.wgsl's surface targets)
-    scattering: vec3<f32>, // reduced scattering sigma_s', 1/mm (isotropic phase)
+    reduced_scattering: vec3<f32>, // sigma_s', 1/mm (isotropic phase)
     // The rough boundary's transmittance against the cosine: coefficients 0-3 and 4-7 of a
     // degree-7 polynomial (transmittance.wgsl, boundary_transmittance).
     boundary_fit: array<vec4<f32>, 2>,

@@ -122,7 +122,7 @@ fn has_term(bit: u32) -> bool {
 // edges), green and blue, whose sources lie between, see it too.
 fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, shadow: f32) -> vec3<f32> {
     let cos_i = dot(n_vertex, l);
-    let scatters = lights.scattering != 0u && object.sss_strength > 0.0;
+    let scatters = lights.sss_runs != 0u && object.sss_strength > 0.0;
     if (!has_term(TERM_SOURCE_SHIFT) || !scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
         return vec3<f32>(shadow);
     }

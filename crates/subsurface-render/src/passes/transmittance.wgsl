@@ -317,7 +317,7 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
         sum += boundary_transmittance(cos_e) * exp(-object.extinction * (t + s_i));
     }
     let t_out = boundary_transmittance(cos_v);
-    return object.scattering * 0.25 * sum * step_mm * t_out;
+    return object.reduced_scattering * 0.25 * sum * step_mm * t_out;
 }
 
 // Light that enters the lit surface around the chord and reaches p through the medium

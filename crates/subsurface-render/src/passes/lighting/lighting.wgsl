@@ -121,34 +121,6 @@ fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
     return select(-n, n, front);
 }
 
-// The bounce pass (passes::bounce): the light the lit surfaces send each texel's surface
-// across the air, gathered from the flux pyramid once per texel of the lateral map's reduced
-// grid, as the lateral taps are: it changes over millimetres. a = the texel's view depth.
-@fragment
-fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    let depth = dot(in.world - camera.position, camera.forward);
-    return vec4<f32>(bounce_irradiance(in.world, oriented_normal(in, front)), depth);
-}
-
-// The bounce at the pixel: interpolated from the lateral map's bounce layer on the pixel's own
-// surface; gathered here only where there is no map (the skin too small on screen for one).
-// Where the map has no texel of the pixel's surface (an outline, a depth edge) the pixel takes
-// none: gathering there per pixel, like the lateral taps, doubled the lighting pass on
-// lavapipe, which runs a loop's body for every pixel once some pixel enters it.
-// Each source has its own pipeline (frame_plan.rs, `LightingVariant::bounce`): 0 none, 1 the map, 2 a
-// gather per pixel; the default (the texture-space pass, which never calls this) keeps all.
-override BOUNCE_SOURCE: u32 = FOLLOW_UNIFORM;
-
-fn pixel_bounce(world: vec3<f32>, n_vertex: vec3<f32>, screen: ScreenSample) -> vec3<f32> {
-    if (BOUNCE_SOURCE == BOUNCE_NONE || lights.bounce_ring == 0u) {
-        return vec3<f32>(0.0);
-    }
-    if (BOUNCE_SOURCE == BOUNCE_MAP || (BOUNCE_SOURCE == FOLLOW_UNIFORM && lights.lateral_downsample > 1u)) {
-        return bounce_from_map(lights.bounce_layer, screen);
-    }
-    return bounce_irradiance(world, n_vertex);
-}
-
 // The shading normal: the interpolated (already oriented) normal bent by the tangent-space
 // normal map.
 fn shading_normal(in: LitVarying, n_vertex: vec3<f32>) -> vec3<f32> {
