@@ -37,6 +37,7 @@ impl AdapterFeatures {
         compute_storage: true,
     };
 
+    /// What `device` supports.
     pub fn of(device: &wgpu::Device) -> Self {
         Self {
             compute_storage: crate::gpu::supports_compute_storage(device),
@@ -52,7 +53,9 @@ pub const TRANSMITTED_LAYERS: u32 = 2;
 /// light's, and the bounce's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LateralShape {
+    /// One map texel per `downsample` x `downsample` pixels; 1: no map.
     pub downsample: u32,
+    /// Array layers: [`TRANSMITTED_LAYERS`] for the transmitted light, plus one for the bounce.
     pub layers: u32,
     /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
     /// surfaces (`LateralPass::Compute` on an adapter that runs them) rather than in the
@@ -61,6 +64,7 @@ pub struct LateralShape {
 }
 
 impl LateralShape {
+    /// No lateral map.
     pub const NONE: Self = Self {
         downsample: 1,
         layers: 0,
@@ -75,6 +79,7 @@ impl LateralShape {
 /// `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LightingVariant {
+    /// The transmittance method's code (`TransmittanceMethod::code`).
     pub method: u32,
     /// 0 no bounce, 1 the lateral map's bounce layer, 2 a gather per pixel (no map).
     pub bounce: u32,
@@ -90,7 +95,9 @@ pub struct LightingVariant {
 /// decide what must be rebuilt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePlan {
+    /// Frame width in pixels.
     pub width: u32,
+    /// Frame height in pixels.
     pub height: u32,
     /// The lateral map's reduction: one texel per `N` x `N` pixels (1: the taps run per pixel).
     pub lateral_downsample: u32,
@@ -249,11 +256,12 @@ fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
 }
 
 /// Which of the uploaded objects (those with triangles, in the scene's order, as
-/// [`upload_objects`] makes them) gather `diffusion`'s lateral taps at each pixel although the
-/// frame has a lateral map of reduction `downsample`: skin so much farther than the nearest
-/// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
-/// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
-/// ([`LightingVariant::lateral`]); every other pixel reads the map with one that does not.
+/// [`upload_objects`](crate::gpu_scene::upload_objects) makes them) gather `diffusion`'s lateral
+/// taps at each pixel although the frame has a lateral map of reduction `downsample`: skin so much
+/// farther than the nearest that its texels would span more than
+/// [`crate::settings::MAX_TEXEL_FACTOR`] times `lateral_texel_mm`. The lighting pass draws them
+/// with a pipeline that holds the taps ([`LightingVariant::lateral`]); every other pixel reads the
+/// map with one that does not.
 pub fn lateral_taps_objects(
     scene: &Scene,
     settings: &RenderSettings,
@@ -273,11 +281,11 @@ pub fn lateral_taps_objects(
         .collect()
 }
 
-/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the
-/// scene's order, as [`upload_objects`] makes them): the pixels `[x0, y0, x1, y1)` its world
-/// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
-/// where they lie outside the view. The lateral map's compute evaluation dispatches over each
-/// object's box alone ([`FramePlan::object_rects`]).
+/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the scene's
+/// order, as [`upload_objects`](crate::gpu_scene::upload_objects) makes them): the pixels `[x0, y0,
+/// x1, y1)` its world bounds project to, the whole frame where the bounds reach behind the camera's
+/// eye, `None` where they lie outside the view. The lateral map's compute evaluation dispatches
+/// over each object's box alone ([`FramePlan::object_rects`]).
 pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 4]>> {
     let camera = camera_uniform(scene, width, height);
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
