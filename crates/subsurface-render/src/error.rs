@@ -32,8 +32,8 @@ pub enum RenderError {
         /// What was wrong, on one line.
         message: String,
     },
-    /// wgpu reported a validation error (or another GPU-side error) while recording or
-    /// submitting work.
+    /// An error wgpu raised since the last [`crate::GpuContext::check`] (validation, out of
+    /// memory), or a GPU profiler that could not be created.
     #[error("wgpu validation error: {0}")]
     Validation(String),
     /// Copying a texture back to the CPU failed.

@@ -55,7 +55,8 @@ pub const TRANSMITTED_LAYERS: u32 = 2;
 pub struct LateralShape {
     /// One map texel per `downsample` x `downsample` pixels; 1: no map.
     pub downsample: u32,
-    /// Array layers: [`TRANSMITTED_LAYERS`] for the transmitted light, plus one for the bounce.
+    /// Array layers: [`TRANSMITTED_LAYERS`] when the map holds the transmitted light, then one
+    /// when it holds the bounce; 0: no map.
     pub layers: u32,
     /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
     /// surfaces (`LateralPass::Compute` on an adapter that runs them) rather than in the
