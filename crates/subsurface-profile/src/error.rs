@@ -50,7 +50,7 @@ pub enum ProfileError {
     /// A count (Gaussians, grid points, LUT texels, ...) outside what is supported.
     #[error("{field}: must be in {min}..={max} (got {value})")]
     Count {
-        /// The offending field (`sigma_a.g`).
+        /// The offending field.
         field: String,
         /// Smallest count supported.
         min: usize,
@@ -62,7 +62,7 @@ pub enum ProfileError {
     /// Buffers or lists whose lengths disagree.
     #[error("{field}: expected length {expected} (got {got})")]
     Length {
-        /// The offending field (`sigma_a.g`).
+        /// The offending field.
         field: String,
         /// The length it must have.
         expected: usize,

@@ -257,12 +257,13 @@ fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
 }
 
 /// Which of the uploaded objects (those with triangles, in the scene's order, as
-/// [`upload_objects`](crate::gpu_scene::upload_objects) makes them) gather `diffusion`'s lateral
-/// taps at each pixel although the frame has a lateral map of reduction `downsample`: skin so much
-/// farther than the nearest that its texels would span more than
-/// [`crate::settings::MAX_TEXEL_FACTOR`] times `lateral_texel_mm`. The lighting pass draws them
-/// with a pipeline that holds the taps ([`LightingVariant::lateral`]); every other pixel reads the
-/// map with one that does not.
+/// [`upload_objects`] makes them) gather `diffusion`'s lateral taps at each pixel although the
+/// frame has a lateral map of reduction `downsample`: skin so much farther than the nearest
+/// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
+/// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
+/// ([`LightingVariant::lateral`]); every other pixel reads the map with one that does not.
+///
+/// [`upload_objects`]: crate::gpu_scene::upload_objects
 pub fn lateral_taps_objects(
     scene: &Scene,
     settings: &RenderSettings,
@@ -282,11 +283,13 @@ pub fn lateral_taps_objects(
         .collect()
 }
 
-/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the scene's
-/// order, as [`upload_objects`](crate::gpu_scene::upload_objects) makes them): the pixels `[x0, y0,
-/// x1, y1)` its world bounds project to, the whole frame where the bounds reach behind the camera's
-/// eye, `None` where they lie outside the view. The lateral map's compute evaluation dispatches
-/// over each object's box alone ([`FramePlan::object_rects`]).
+/// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the
+/// scene's order, as [`upload_objects`] makes them): the pixels `[x0, y0, x1, y1)` its world
+/// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
+/// where they lie outside the view. The lateral map's compute evaluation dispatches over each
+/// object's box alone ([`FramePlan::object_rects`]).
+///
+/// [`upload_objects`]: crate::gpu_scene::upload_objects
 pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 4]>> {
     let camera = camera_uniform(scene, width, height);
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);

@@ -114,11 +114,11 @@ pub struct ObjectUniform {
     pub world_per_mm: f32,
     /// Scale on the thickness transmittance sees.
     pub translucency: f32,
-    /// 1 when the albedo texture is bound, 0 when it is a placeholder.
+    /// 1: the object has an albedo texture; 0: a 1x1 white stand-in is bound.
     pub has_albedo_map: u32,
-    /// 1 when the normal map is bound, 0 when it is a placeholder.
+    /// 1: the object has a normal map; 0: a 1x1 white stand-in is bound.
     pub has_normal_map: u32,
-    /// 1 when the specular map is bound, 0 when it is a placeholder.
+    /// 1: the object has a specular map; 0: a 1x1 white stand-in is bound.
     pub has_specular_map: u32,
     /// Row of the screen-space SSS profile table.
     pub profile: u32,

@@ -221,9 +221,9 @@ fn thickness_flag(view: DebugView) -> u32 {
 }
 
 impl Renderer {
-    /// Uploads the scene and builds every pass for `options`; errors when the settings
-    /// exceed the device's limits, the memory or work budget, or a skin mesh lacks the UVs a
-    /// texture-space method needs.
+    /// Uploads the scene and builds every pass for `options`. Errors when a setting is out of
+    /// range or beyond the device's limits, when the frame exceeds the memory or work budget, or
+    /// when a skin mesh lacks the UVs a texture-space method needs.
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,

@@ -25,7 +25,7 @@ pub enum SssMethod {
 }
 
 impl SssMethod {
-    /// Every method, in the order the command line lists them.
+    /// Every method.
     pub const ALL: [SssMethod; 5] = [
         SssMethod::None,
         SssMethod::Gaussian6,

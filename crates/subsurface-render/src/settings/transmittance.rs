@@ -89,7 +89,7 @@ pub enum LateralPass {
 }
 
 impl LateralPass {
-    /// Both ways.
+    /// Both evaluations.
     pub const ALL: [LateralPass; 2] = [LateralPass::Compute, LateralPass::Fragment];
 
     /// The name in scene files and on the command line.

@@ -33,7 +33,7 @@ use crate::settings::{RenderSettings, TransmittanceMethod};
 use crate::timing::TimedPass;
 use crate::uniforms::ObjectUniform;
 
-/// The pass's WGSL: the lighting shader's transmittance code and transmitted_light.wgsl.
+/// The pass's WGSL: the lighting shader's files and transmitted_light.wgsl.
 pub const SHADER: &str = concat!(
     include_str!("../fullscreen.wgsl"),
     include_str!("../ids.wgsl"),
