@@ -13,12 +13,12 @@ use crate::gaussian::bisect;
 /// Diffuse Fresnel reflectance `F_dr` of a boundary with relative index `eta` (>= 1): the
 /// share of diffuse light inside the medium that the boundary reflects back in.
 ///
-/// Up to [`FDR_POLYNOMIAL_MAX_ETA`] it is the polynomial fit Jensen et al. 2001 use (within
-/// 1e-3 of the exact integral there); beyond, that fit grows past the exact value and reaches
-/// 1 at eta = 3.86 (A = (1 + F_dr) / (1 - F_dr) turned negative, the profile vanished and
-/// `eta = 4`, within the documented 1..=10, failed with "r_max_mm: must be > 0"), so the
-/// exact hemispherical integral [`fresnel_diffuse_reflectance_exact`] takes over, blended
-/// linearly across [`FDR_BLEND_ETA`] so that F_dr stays continuous.
+/// Up to eta = 1.8 (`FDR_POLYNOMIAL_MAX_ETA`) it is the polynomial fit Jensen et al. 2001 use
+/// (within 1e-3 of the exact integral there); beyond, that fit grows past the exact value and
+/// reaches 1 at eta = 3.86 (A = (1 + F_dr) / (1 - F_dr) turned negative, the profile vanished
+/// and `eta = 4`, within the documented 1..=10, failed with "r_max_mm: must be > 0"), so the
+/// exact hemispherical integral (`fresnel_diffuse_reflectance_exact`) takes over, blended
+/// linearly across eta 1.8..2.2 (`FDR_BLEND_ETA`) so that F_dr stays continuous.
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
     let poly = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
     let (lo, hi) = FDR_BLEND_ETA;
@@ -204,6 +204,7 @@ impl Dipole {
 /// the two extrapolated boundaries.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Multipole {
+    /// The medium: coefficients per mm and the faces' relative index.
     pub dipole: Dipole,
     /// Slab thickness `d` in mm, > 0.
     pub thickness_mm: f64,

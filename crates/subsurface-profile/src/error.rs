@@ -10,19 +10,38 @@ use thiserror::Error;
 pub enum ProfileError {
     /// A value that must be finite was NaN or infinite.
     #[error("{field}: must be finite (got {value})")]
-    NonFinite { field: String, value: f64 },
+    NonFinite {
+        /// The offending field (`sigma_a.g`).
+        field: String,
+        /// The value given.
+        value: f64,
+    },
     /// A value that must be strictly positive was not.
     #[error("{field}: must be > 0 (got {value})")]
-    NotPositive { field: String, value: f64 },
+    NotPositive {
+        /// The offending field (`sigma_a.g`).
+        field: String,
+        /// The value given.
+        value: f64,
+    },
     /// A value that must be zero or positive was negative.
     #[error("{field}: must be >= 0 (got {value})")]
-    Negative { field: String, value: f64 },
+    Negative {
+        /// The offending field (`sigma_a.g`).
+        field: String,
+        /// The value given.
+        value: f64,
+    },
     /// A value fell outside its closed range.
     #[error("{field}: must be in {min}..={max} (got {value})")]
     OutOfRange {
+        /// The offending field (`sigma_a.g`).
         field: String,
+        /// Lower bound, inclusive.
         min: f64,
+        /// Upper bound, inclusive.
         max: f64,
+        /// The value given.
         value: f64,
     },
     /// The separable kernel needs an odd tap count in 3..=63.
@@ -31,26 +50,44 @@ pub enum ProfileError {
     /// A count (Gaussians, grid points, LUT texels, ...) outside what is supported.
     #[error("{field}: must be in {min}..={max} (got {value})")]
     Count {
+        /// The offending field.
         field: String,
+        /// Smallest count supported.
         min: usize,
+        /// Largest count supported.
         max: usize,
+        /// The count given.
         value: usize,
     },
     /// Buffers or lists whose lengths disagree.
     #[error("{field}: expected length {expected} (got {got})")]
     Length {
+        /// The offending field.
         field: String,
+        /// The length it must have.
         expected: usize,
+        /// The length given.
         got: usize,
     },
     /// Any other rule, stated in `reason`.
     #[error("{field}: {reason}")]
-    Invalid { field: String, reason: String },
+    Invalid {
+        /// The offending field (`sigma_a.g`).
+        field: String,
+        /// The rule broken, on one line.
+        reason: String,
+    },
     /// No preset of that name.
     #[error("material: unknown name {name:?} (known: {known})")]
-    UnknownMaterial { name: String, known: String },
+    UnknownMaterial {
+        /// The name asked for.
+        name: String,
+        /// The preset names, comma-separated.
+        known: String,
+    },
 }
 
+/// `Result` with [`ProfileError`] as its default error.
 pub type Result<T, E = ProfileError> = std::result::Result<T, E>;
 
 /// `Ok(value)` where `ok`, else the error `err` builds for `field`.

@@ -15,6 +15,7 @@
 //!
 //! Units: millimetres for distances, mm^2 for variances, mm^-1 for coefficients.
 
+#![warn(missing_docs)]
 // Per-channel arithmetic indexes several parallel `[_; 3]` arrays at once;
 // `for c in 0..3` reads better there than zipped iterators.
 #![allow(clippy::needless_range_loop)]

@@ -13,8 +13,11 @@ use crate::gaussian::SumOfGaussians;
 /// reproduces [`TransmittanceLut::sample`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TransmittanceLut {
+    /// Texels, >= 2.
     pub resolution: u32,
+    /// Thickness of the last texel, mm; lookups beyond it clamp.
     pub s_max_mm: f32,
+    /// RGB `T(s)` per texel, texel `i` at `i / (resolution - 1) * s_max_mm`.
     pub data: Vec<[f32; 3]>,
 }
 

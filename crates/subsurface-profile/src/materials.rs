@@ -12,8 +12,11 @@ use crate::gaussian::SumOfGaussians;
 /// scattering and absorption coefficients in mm^-1 for R, G, B.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MeasuredMaterial {
+    /// Lower-case name without spaces (`"skin1"`, `"wholemilk"`).
     pub name: &'static str,
+    /// Reduced scattering coefficient sigma_s' per mm, R, G, B.
     pub sigma_s_prime: [f64; 3],
+    /// Absorption coefficient sigma_a per mm, R, G, B.
     pub sigma_a: [f64; 3],
 }
 
@@ -49,13 +52,25 @@ const fn m(name: &'static str, sigma_s_prime: [f64; 3], sigma_a: [f64; 3]) -> Me
 pub enum Material {
     /// Given directly as Gaussians (the "skin" preset: d'Eon's six).
     Gaussians {
+        /// The preset's name, or the medium written out.
         name: String,
+        /// The profile R(r), variances in mm^2.
         profile: SumOfGaussians,
     },
     /// Semi-infinite medium, dipole model.
-    Dipole { name: String, dipole: Dipole },
+    Dipole {
+        /// The preset's name, or the medium written out.
+        name: String,
+        /// The medium's coefficients, per mm.
+        dipole: Dipole,
+    },
     /// Slab of finite thickness, multipole model.
-    Multipole { name: String, multipole: Multipole },
+    Multipole {
+        /// The preset's name, or the medium written out.
+        name: String,
+        /// The medium's coefficients and the slab's thickness.
+        multipole: Multipole,
+    },
 }
 
 /// Names accepted by [`material`]: "skin" then Jensen 2001's materials.
@@ -104,6 +119,7 @@ pub fn material(name: &str) -> Result<Material> {
 }
 
 impl Material {
+    /// The name: a preset's canonical name (`"skin1"`), or a measured medium written out.
     pub fn name(&self) -> &str {
         match self {
             Material::Gaussians { name, .. }

@@ -108,12 +108,15 @@ pub fn slab_radiance(
 /// as diffusion says, only its level is the walk's).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SlabTransmittance {
+    /// Thickness of the last value, mm.
     pub s_max_mm: f64,
     /// Value at `i / (len - 1) * s_max_mm`.
     pub data: Vec<[f64; 3]>,
 }
 
 impl SlabTransmittance {
+    /// Tabulates `points` thicknesses over `0..=s_max_mm` with `walks` random walks per
+    /// thickness and channel (100..=1e7); the multipole takes over where too few walks get out.
     pub fn new(dipole: &Dipole, points: usize, s_max_mm: f64, walks: u32) -> Result<Self> {
         count("points", points, 2, 65536)?;
         positive("s_max_mm", s_max_mm)?;

@@ -37,6 +37,7 @@ impl AdapterFeatures {
         compute_storage: true,
     };
 
+    /// What `device` supports.
     pub fn of(device: &wgpu::Device) -> Self {
         Self {
             compute_storage: crate::gpu::supports_compute_storage(device),
@@ -52,7 +53,10 @@ pub const TRANSMITTED_LAYERS: u32 = 2;
 /// light's, and the bounce's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LateralShape {
+    /// One map texel per `downsample` x `downsample` pixels; 1: no map.
     pub downsample: u32,
+    /// Array layers: [`TRANSMITTED_LAYERS`] when the map holds the transmitted light, then one
+    /// when it holds the bounce; 0: no map.
     pub layers: u32,
     /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
     /// surfaces (`LateralPass::Compute` on an adapter that runs them) rather than in the
@@ -61,6 +65,7 @@ pub struct LateralShape {
 }
 
 impl LateralShape {
+    /// No lateral map.
     pub const NONE: Self = Self {
         downsample: 1,
         layers: 0,
@@ -75,6 +80,7 @@ impl LateralShape {
 /// `TRANSMITTANCE_METHOD` and `LATERAL_SOURCE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LightingVariant {
+    /// The transmittance method's code (`TransmittanceMethod::code`).
     pub method: u32,
     /// 0 no bounce, 1 the lateral map's bounce layer, 2 a gather per pixel (no map).
     pub bounce: u32,
@@ -90,7 +96,9 @@ pub struct LightingVariant {
 /// decide what must be rebuilt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePlan {
+    /// Frame width in pixels.
     pub width: u32,
+    /// Frame height in pixels.
     pub height: u32,
     /// The lateral map's reduction: one texel per `N` x `N` pixels (1: the taps run per pixel).
     pub lateral_downsample: u32,
@@ -254,6 +262,8 @@ fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
 /// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
 /// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
 /// ([`LightingVariant::lateral`]); every other pixel reads the map with one that does not.
+///
+/// [`upload_objects`]: crate::gpu_scene::upload_objects
 pub fn lateral_taps_objects(
     scene: &Scene,
     settings: &RenderSettings,
@@ -278,6 +288,8 @@ pub fn lateral_taps_objects(
 /// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
 /// where they lie outside the view. The lateral map's compute evaluation dispatches over each
 /// object's box alone ([`FramePlan::object_rects`]).
+///
+/// [`upload_objects`]: crate::gpu_scene::upload_objects
 pub fn screen_rects(scene: &Scene, width: u32, height: u32) -> Vec<Option<[u32; 4]>> {
     let camera = camera_uniform(scene, width, height);
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);

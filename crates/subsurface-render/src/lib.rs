@@ -4,6 +4,8 @@
 //! diffuse, specular, linear depth, SSS strength) -> composite and filmic tone map -> image.
 //! Each pass lives in [`passes`] with its WGSL beside it and can be used on its own textures.
 
+#![warn(missing_docs)]
+
 pub mod budget;
 pub mod error;
 pub mod frame_plan;

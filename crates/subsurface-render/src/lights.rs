@@ -11,17 +11,25 @@ use crate::uniforms::{LightUniform, LightsUniform, MAX_LIGHTS, mat};
 /// Where each light's shadow maps live in the shadow atlas (a 2-D array texture).
 #[derive(Clone, Debug)]
 pub struct ShadowLayer {
+    /// Index of the light in the scene's `lights`.
     pub light: usize,
+    /// The layer's side in texels (the light's `shadow_map_size`); the atlas may be larger.
     pub size: u32,
+    /// World -> clip of the shadow camera.
     pub view_proj: Mat4,
     /// Origin that `light_distance` measures from (the light, or the directional light's
     /// shadow-camera origin).
     pub origin: Vec3,
 }
 
+/// The frame's lights as the shaders read them, and their shadow-map layers.
 pub struct LightSetup {
+    /// Every light, with the frame's ambient light and transmittance settings.
     pub uniform: LightsUniform,
+    /// One per shadow camera: six per shadowed point light, one per shadowed spot or directional
+    /// light.
     pub layers: Vec<ShadowLayer>,
+    /// Side of the shadow atlas in texels: the largest `shadow_map_size`, at least 1.
     pub atlas_size: u32,
 }
 

@@ -18,8 +18,13 @@ use crate::scene::{MaterialDesc, Scene};
 /// diffusion-theory transmittance.
 #[derive(Clone, Debug)]
 pub struct MaterialOptics {
+    /// The diffusion profile R(r) as a sum of Gaussians, in mm and mm²: d'Eon's for the skin
+    /// preset, a six-Gaussian fit of the medium's R(r) otherwise.
     pub profile: SumOfGaussians,
+    /// Reduced extinction sigma_a + sigma_s' per mm, for Beer-Lambert (skin1's for the Gaussian
+    /// preset).
     pub sigma_t: [f32; 3],
+    /// The medium's coefficients and index of refraction (skin1's for the Gaussian preset).
     pub dipole: Dipole,
     /// The preset is d'Eon's skin Gaussians, for which the papers' own kernels exist.
     pub is_skin_preset: bool,
@@ -69,6 +74,8 @@ fn fitted() -> std::sync::MutexGuard<'static, Vec<(String, MaterialOptics)>> {
 }
 
 impl MaterialCache {
+    /// The optics of `medium`, from this cache, the process's memo, or derived and fitted; `field`
+    /// names the material in errors.
     pub fn get(&mut self, medium: &Medium, field: &str) -> Result<MaterialOptics, RenderError> {
         let key = medium.to_string();
         if let Some(m) = self.cache.get(&key) {
@@ -166,6 +173,7 @@ pub fn screen_kernels(
 /// scatter get row 0 (the table always has one row, so the passes can bind it).
 #[derive(Clone, Debug)]
 pub struct ProfileTable {
+    /// One row per distinct profile and kernel parameters; row 0 always exists.
     pub kernels: Vec<ScreenKernels>,
     /// One per `scene.objects`.
     pub object_rows: Vec<u32>,
@@ -175,6 +183,8 @@ pub struct ProfileTable {
 pub const MAX_PROFILES: usize = 1024;
 
 impl ProfileTable {
+    /// The table of `scene`'s scattering materials, with separable kernels of `samples` taps;
+    /// errors when a medium is invalid or there are more than [`MAX_PROFILES`] rows.
     pub fn for_scene(
         scene: &Scene,
         samples: u32,

@@ -84,6 +84,7 @@ pub fn read_texture_level(
     Ok(out)
 }
 
+/// Reads mip 0, layer 0 of a texture; returns tightly packed rows.
 pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>, RenderError> {
     read_texture_layer(ctx, texture, 0)
 }
@@ -108,6 +109,8 @@ pub fn read_float(
     Ok(decode_float(texture.format(), &bytes))
 }
 
+/// Bytes read back from a float texture as f32 values, and the channels per texel; half floats are
+/// widened, any other format is read as 32-bit floats.
 pub fn decode_float(format: wgpu::TextureFormat, bytes: &[u8]) -> (Vec<f32>, usize) {
     use wgpu::TextureFormat as F;
     match format {

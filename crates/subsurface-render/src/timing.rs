@@ -8,7 +8,9 @@ use crate::error::RenderError;
 /// shadow-map layer, two blur passes) are summed under one name.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PassTiming {
+    /// The pass's label (`lighting`, `sss`, ...).
     pub name: String,
+    /// GPU milliseconds, summed over the pass's runs in the frame.
     pub ms: f64,
 }
 
@@ -16,6 +18,7 @@ pub struct PassTiming {
 pub struct TimedPass(Option<GpuProfilerQuery>);
 
 impl TimedPass {
+    /// Opens a query named `label`; none without a profiler.
     pub fn begin(
         profiler: Option<&GpuProfiler>,
         label: &str,
@@ -23,16 +26,19 @@ impl TimedPass {
     ) -> Self {
         Self(profiler.map(|p| p.begin_pass_query(label, encoder)))
     }
+    /// Timestamp writes for a render pass (`None` without timestamp queries).
     pub fn writes(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         self.0
             .as_ref()
             .and_then(|q| q.render_pass_timestamp_writes())
     }
+    /// Timestamp writes for a compute pass (`None` without timestamp queries).
     pub fn compute_writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         self.0
             .as_ref()
             .and_then(|q| q.compute_pass_timestamp_writes())
     }
+    /// Closes the query.
     pub fn end(self, profiler: Option<&GpuProfiler>, encoder: &mut wgpu::CommandEncoder) {
         if let (Some(p), Some(q)) = (profiler, self.0) {
             p.end_query(encoder, q);
@@ -40,6 +46,7 @@ impl TimedPass {
     }
 }
 
+/// A profiler for [`TimedPass`]; it records no times on a device without timestamp queries.
 pub fn new_profiler(device: &wgpu::Device) -> Result<GpuProfiler, RenderError> {
     let settings = GpuProfilerSettings {
         enable_timer_queries: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),

@@ -3,24 +3,33 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+/// Lights a scene may have: the length of `Lights::lights` in common.wgsl.
 pub const MAX_LIGHTS: usize = 8;
 
+/// The camera (`Camera` in common.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct CameraUniform {
+    /// World -> clip (wgpu conventions), column-major.
     pub view_proj: [[f32; 4]; 4],
+    /// Eye position, scene units.
     pub position: [f32; 3],
+    /// Near plane distance, scene units.
     pub near: f32,
     /// Unit view direction: linear depth is measured along it.
     pub forward: [f32; 3],
+    /// Far plane distance, scene units.
     pub far: f32,
-    /// 0.5 * height / tan(fov_y / 2).
+    /// Focal length in pixels, 0.5 * height / tan(fov_y / 2): turns scene units at a linear
+    /// depth into pixels.
     pub focal_px: f32,
     /// The frame's size in pixels.
     pub viewport: [f32; 2],
+    /// Padding to the WGSL layout.
     pub _pad: f32,
 }
 
+/// One light (`Light` in common.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct LightUniform {
@@ -32,22 +41,27 @@ pub struct LightUniform {
     pub direction: [f32; 3],
     /// First shadow-map layer, -1 = no shadow map.
     pub first_layer: f32,
-    /// Colour x intensity.
+    /// Colour x intensity, linear RGB.
     pub color: [f32; 3],
-    /// Scene units.
+    /// Shadow depth bias, scene units.
     pub shadow_bias: f32,
+    /// Spot cone: cosine of the outer half-angle, where the light reaches zero.
     pub cos_outer: f32,
+    /// Spot cone: cosine of the inner half-angle, inside which the light is at full intensity.
     pub cos_inner: f32,
     /// This light's share of the atlas layer, in uv.
     pub shadow_uv_scale: f32,
     /// One atlas texel, in uv.
     pub atlas_texel: f32,
+    /// World -> clip of each shadow layer (six cube faces for a point light, one otherwise).
     pub view_proj: [[[f32; 4]; 4]; 6],
 }
 
+/// The frame's lights and transmittance settings (`Lights` in common.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct LightsUniform {
+    /// Lights in use at the start of `lights`.
     pub count: u32,
     /// `TransmittanceMethod::code`.
     pub transmittance: u32,
@@ -55,6 +69,7 @@ pub struct LightsUniform {
     pub thickness_filter: u32,
     /// 1 = write the thickness instead of diffuse (`DebugView::Thickness`).
     pub thickness_view: u32,
+    /// Uniform ambient radiance, linear RGB.
     pub ambient: [f32; 3],
     /// Scene units the shaded point moves inward before the shadow-map lookup.
     pub normal_shrink: f32,
@@ -73,31 +88,41 @@ pub struct LightsUniform {
     pub bounce_ring: u32,
     /// `BounceSettings::cell_mm`: the finest cells read, profile millimetres.
     pub bounce_cell_mm: f32,
+    /// Padding to the WGSL layout.
     pub _pad: [u32; 2],
+    /// The lights; the first `count` are used.
     pub lights: [LightUniform; MAX_LIGHTS],
 }
 
+/// One object's transform and material (`Object` in common.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct ObjectUniform {
+    /// Object -> world.
     pub model: [[f32; 4]; 4],
+    /// Inverse transpose of `model`, for normals.
     pub normal_matrix: [[f32; 4]; 4],
-    /// Linear albedo.
+    /// Linear albedo (the material's times the medium's diffuse albedo).
     pub albedo: [f32; 3],
     /// Beckmann roughness m.
     pub roughness: f32,
     /// Specular intensity rho_s (1: the boundary's own reflection).
     pub specular: f32,
+    /// 0 = not skin, 1 = full subsurface scattering.
     pub sss_strength: f32,
     /// Scene units per profile millimetre.
     pub world_per_mm: f32,
+    /// Scale on the thickness transmittance sees.
     pub translucency: f32,
+    /// 1: the object has an albedo texture; 0: a 1x1 white stand-in is bound.
     pub has_albedo_map: u32,
+    /// 1: the object has a normal map; 0: a 1x1 white stand-in is bound.
     pub has_normal_map: u32,
+    /// 1: the object has a specular map; 0: a 1x1 white stand-in is bound.
     pub has_specular_map: u32,
     /// Row of the screen-space SSS profile table.
     pub profile: u32,
-    /// Beer-Lambert extinction per mm.
+    /// Beer-Lambert extinction sigma_t per mm.
     pub extinction: [f32; 3],
     /// Thickness range of the T(s) LUT in mm.
     pub lut_range_mm: f32,
@@ -109,28 +134,37 @@ pub struct ObjectUniform {
     /// The object's index in the frame's draw list: the lateral map's surface targets record
     /// it, and each object's compute dispatch evaluates only its own texels.
     pub index: u32,
+    /// Padding to the WGSL layout.
     pub _pad: f32,
     /// Reduced scattering coefficient sigma_s' per mm (single scattering, isotropic phase).
     pub reduced_scattering: [f32; 3],
+    /// Padding to the WGSL layout.
     pub _pad2: f32,
     /// The rough boundary's transmittance against the cosine, as a degree-7 polynomial:
     /// coefficients 0..4, 4..8 (`subsurface_profile::specular::rough_transmittance_fit`).
     pub boundary_fit: [[f32; 4]; 2],
 }
 
+/// One shadow-map layer's camera (`ShadowView` in shadow.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct ShadowViewUniform {
+    /// World -> clip of the layer.
     pub view_proj: [[f32; 4]; 4],
+    /// xyz: where the stored light distance is measured from; w: the light's kind.
     pub light_position: [f32; 4],
+    /// xyz: the light's unit direction; w unused.
     pub light_direction: [f32; 4],
+    /// Padding: the block is 256 bytes.
     pub _pad: [[f32; 4]; 10],
 }
 
+/// A matrix as WGSL's column-major `mat4x4<f32>`.
 pub fn mat(m: Mat4) -> [[f32; 4]; 4] {
     m.to_cols_array_2d()
 }
 
+/// `v` and `w` as a WGSL `vec4<f32>`.
 pub fn v4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
@@ -160,6 +194,7 @@ pub struct BlurUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct TsmViewUniform {
+    /// World -> clip of the layer.
     pub view_proj: [[f32; 4]; 4],
 }
 

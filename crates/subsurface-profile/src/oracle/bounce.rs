@@ -39,11 +39,14 @@ impl FluxCell {
 /// One level: `size` x `size` cells, row by row.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FluxLevel {
+    /// Cells per side.
     pub size: usize,
+    /// `size * size` cells, row by row.
     pub cells: Vec<FluxCell>,
 }
 
 impl FluxLevel {
+    /// The cell in column `i`, row `j`.
     pub fn at(&self, i: usize, j: usize) -> &FluxCell {
         &self.cells[j * self.size + i]
     }
@@ -86,8 +89,9 @@ pub struct Gather<'a> {
     pub ring: f64,
     /// A finest cell's area on the surface at the point.
     pub cell_area: f64,
-    /// The point and its unit normal.
+    /// The shaded point.
     pub point: [f64; 3],
+    /// The point's unit normal.
     pub normal: [f64; 3],
     /// Where the light is (its squared distances are the cells' `spread`).
     pub light_origin: [f64; 3],

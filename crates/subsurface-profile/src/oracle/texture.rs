@@ -29,7 +29,9 @@ pub const MAX_SIGMA_TEXELS: f32 = 256.0;
 /// standard deviation in profile millimetres) and its RGB weight.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlurStep {
+    /// Standard deviation of the increment, profile millimetres.
     pub sigma_mm: f32,
+    /// RGB weight of this Gaussian, normalised per channel with the others.
     pub weight: [f32; 3],
 }
 
@@ -38,7 +40,9 @@ pub struct BlurStep {
 /// `sigma_mm`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlurKernel {
+    /// RGB weight of the narrowest Gaussian: the unblurred irradiance.
     pub first_weight: [f32; 3],
+    /// The later Gaussians, narrowest first.
     pub steps: Vec<BlurStep>,
 }
 

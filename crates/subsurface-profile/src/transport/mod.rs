@@ -117,6 +117,7 @@ pub fn slab_transport(dipole: &Dipole, points: usize, s_max_mm: f64) -> Result<T
 /// See [`slab_transport`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransportTable {
+    /// Thickness of the last row, mm; rows are evenly spaced from 0.
     pub s_max_mm: f64,
     /// Diffuse transmittance of light scattered at least twice, per channel, at evenly spaced
     /// thicknesses from 0 (no slab: 0) to `s_max_mm`.

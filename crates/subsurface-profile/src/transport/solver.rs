@@ -64,6 +64,7 @@ impl SlabSolver {
     /// the fluxes (checked against twice as many in the tests).
     pub const NODES: (usize, usize) = (12, 20);
 
+    /// A solver for faces of relative index `eta` (1..=10), with [`Self::NODES`] directions.
     pub fn new(eta: f64) -> Result<Self> {
         Self::with_nodes(eta, Self::NODES)
     }

@@ -53,9 +53,13 @@ impl Drop for TeardownEnd {
 pub struct GpuContext {
     // Must stay the first field (see `TEARDOWN`).
     _teardown_begin: TeardownBegin,
+    /// The wgpu instance the adapter came from (the viewer makes its surface with it).
     pub instance: wgpu::Instance,
+    /// The adapter the device runs on.
     pub adapter: wgpu::Adapter,
+    /// The device, with the adapter's own limits and timestamp queries where it has them.
     pub device: wgpu::Device,
+    /// The device's queue.
     pub queue: wgpu::Queue,
     errors: Arc<Mutex<Vec<String>>>,
     // Must stay the last field.

@@ -4,6 +4,7 @@
 use crate::gpu::layout;
 use crate::mesh::Vertex;
 
+/// Vertex buffer layout of [`Vertex`]: position, normal, uv, tangent at locations 0..=3.
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
@@ -37,15 +38,22 @@ pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// An object's mesh and material on the GPU, drawn by every mesh pass.
 pub struct GpuObject {
+    /// [`Vertex`] buffer, object space.
     pub vertices: wgpu::Buffer,
+    /// Triangle list indices, `u32`.
     pub indices: wgpu::Buffer,
+    /// Indices drawn: three per triangle.
     pub index_count: u32,
+    /// The object's [`crate::uniforms::ObjectUniform`].
     pub uniform: wgpu::Buffer,
+    /// Group 1 of the mesh passes: the uniform and the material maps ([`object_layout`]).
     pub bind_group: wgpu::BindGroup,
 }
 
 impl GpuObject {
+    /// Binds group 1 and the buffers, and draws the mesh once.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));

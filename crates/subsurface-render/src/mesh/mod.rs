@@ -26,8 +26,11 @@ pub use self::tessellate::MAX_TESSELLATION;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
+    /// Object-space position, the mesh's units.
     pub position: [f32; 3],
+    /// Object-space unit normal.
     pub normal: [f32; 3],
+    /// Texture coordinates (a glTF's `TEXCOORD_0`).
     pub uv: [f32; 2],
     /// xyz: unit tangent; w: bitangent sign (MikkTSpace), `bitangent = w * cross(normal, tangent)`.
     pub tangent: [f32; 4],
@@ -36,7 +39,9 @@ pub struct Vertex {
 /// An indexed triangle list in object space (glTF node transforms baked in).
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
+    /// The vertices the indices refer to.
     pub vertices: Vec<Vertex>,
+    /// Triangle list, three indices per triangle, counter-clockwise front faces.
     pub indices: Vec<u32>,
     /// Triangles whose glTF primitive had no `TEXCOORD_0` (their uvs are all the origin).
     /// A mesh where only some primitives lack UVs still covers UV space, so the coverage
@@ -50,6 +55,7 @@ pub struct Mesh {
 pub struct MissingUvs {
     /// `mesh M primitive P` of the glTF file.
     pub first_primitive: String,
+    /// Triangles, over all primitives without `TEXCOORD_0`.
     pub triangles: usize,
 }
 

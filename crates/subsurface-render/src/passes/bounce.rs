@@ -40,6 +40,7 @@ pub fn base_texels(atlas_size: u32) -> u32 {
 }
 /// The layers `FluxLayers` of bounce_build.wgsl holds: six per light.
 const MAX_LAYERS: usize = 48;
+/// Texel format of the pyramid's position and normal textures.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// The spread's one channel.
 pub const SPREAD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
@@ -110,8 +111,11 @@ pub struct FluxPyramid {
     pub normal: wgpu::Texture,
     /// r = sum of flux x squared distance from the light's origin.
     pub spread: wgpu::Texture,
+    /// All levels and layers of `position` as one array view.
     pub position_view: wgpu::TextureView,
+    /// All levels and layers of `normal` as one array view.
     pub normal_view: wgpu::TextureView,
+    /// All levels and layers of `spread` as one array view.
     pub spread_view: wgpu::TextureView,
     layer_buffer: wgpu::Buffer,
     base: wgpu::ComputePipeline,

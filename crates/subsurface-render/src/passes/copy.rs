@@ -3,8 +3,10 @@
 use crate::passes::util;
 use crate::timing::TimedPass;
 
+/// The copy pass's WGSL: the full-screen triangle and a fragment stage that returns its texel.
 pub const SHADER: &str = concat!(include_str!("fullscreen.wgsl"), include_str!("copy.wgsl"));
 
+/// A full-screen copy of one texture: the cheapest image pass, which SSS times are compared with.
 pub struct CopyPass {
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
@@ -49,6 +51,7 @@ impl CopyPass {
         }
     }
 
+    /// Records the copy, timed as "copy".
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,

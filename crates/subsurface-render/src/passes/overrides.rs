@@ -59,6 +59,7 @@ impl Terms {
     pub const SINGLE_SCATTERING: u32 = 2;
     /// The diffusion source's shadow along the refracted ray (`source_shadow`).
     pub const SOURCE_SHIFT: u32 = 4;
+    /// Every term.
     pub const ALL: Self = Self(7);
 
     /// The terms `settings` asks for.

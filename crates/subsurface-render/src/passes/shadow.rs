@@ -10,11 +10,14 @@ use crate::lights::ShadowLayer;
 use crate::passes::util;
 use crate::uniforms::{ShadowViewUniform, mat, v4};
 
+/// The shadow pass's WGSL: common declarations, the object's group and shadow.wgsl.
 pub const SHADER: &str = concat!(
     include_str!("common.wgsl"),
     include_str!("bindings/object.wgsl"),
     include_str!("shadow.wgsl")
 );
+/// Texel format of the shadow atlas: r = linear light distance in scene units, g = the entry
+/// normal, octahedral-encoded.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// All shadow maps ([`util::LayeredPass::atlas`]): one layer per spot/directional light, six
@@ -29,6 +32,9 @@ impl std::ops::Deref for ShadowPass {
 }
 
 impl ShadowPass {
+    /// One atlas layer per entry of `layers`, `atlas_size` texels square; `light_kinds` holds each
+    /// light's kind and direction `[kind, x, y, z]`. Errors when the atlas or its layer count
+    /// exceeds the device's limits.
     pub fn new(
         ctx: &GpuContext,
         object_layout: &wgpu::BindGroupLayout,

@@ -6,6 +6,7 @@ use wgpu::util::DeviceExt;
 use crate::passes::util;
 use crate::timing::TimedPass;
 
+/// The tone-map pass's WGSL: the full-screen triangle and tonemap.wgsl.
 pub const SHADER: &str = concat!(
     include_str!("fullscreen.wgsl"),
     include_str!("tonemap.wgsl")
@@ -17,6 +18,7 @@ pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSr
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DebugView {
+    /// The tone-mapped composite: diffuse after SSS plus specular, in sRGB.
     #[default]
     Final,
     /// SSS strength mask (white = skin)
@@ -79,6 +81,8 @@ pub struct ToneMapInputs<'a> {
     pub sss: &'a wgpu::TextureView,
 }
 
+/// Composites diffuse (after SSS) and specular radiance, applies exposure and Hable's filmic curve,
+/// and writes sRGB (or a debug view).
 pub struct ToneMapPass {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
@@ -149,6 +153,7 @@ impl ToneMapPass {
         );
     }
 
+    /// Draws the whole of `output` from the inputs of `bind_group`, timed as "tonemap".
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -257,13 +257,21 @@ pub fn additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
 /// A pipeline that draws `GpuObject` meshes (vertex buffer [`VERTEX_LAYOUT`]) with one module's
 /// vertex and fragment entry points into unblended targets of `targets`' formats.
 pub struct MeshPipeline<'a> {
+    /// Names the pipeline in validation errors and captures.
     pub label: &'a str,
+    /// The pipeline's bind group layouts.
     pub layout: &'a wgpu::PipelineLayout,
+    /// The module holding both entry points.
     pub module: &'a wgpu::ShaderModule,
+    /// Vertex entry point.
     pub vertex: &'a str,
+    /// Fragment entry point.
     pub fragment: &'a str,
+    /// One colour target per format, in location order.
     pub targets: &'a [wgpu::TextureFormat],
+    /// Faces to cull; `None` draws both sides.
     pub cull_mode: Option<wgpu::Face>,
+    /// How the pipeline uses its z-buffer.
     pub depth: DepthTest,
     /// Values of the fragment stage's pipeline-overridable constants (WGSL `override`).
     pub constants: &'a [(&'a str, f64)],
@@ -283,6 +291,7 @@ pub enum DepthTest {
 }
 
 impl MeshPipeline<'_> {
+    /// Builds the render pipeline.
     pub fn create(&self, device: &wgpu::Device) -> wgpu::RenderPipeline {
         let targets: Vec<_> = self.targets.iter().map(|&f| Some(f.into())).collect();
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -394,13 +403,19 @@ pub struct LayeredPassDesc<'a> {
     /// Names the pipeline, the render and timed passes; "{label} view" the per-layer light
     /// camera uniform, "{label} depth" the z-buffer and "{label}.wgsl" the shader.
     pub label: &'static str,
+    /// Names the atlas texture.
     pub atlas_label: &'a str,
+    /// WGSL source of the pass.
     pub shader: &'a str,
+    /// Vertex entry point.
     pub vertex: &'a str,
+    /// Fragment entry point.
     pub fragment: &'a str,
+    /// The atlas's texel format.
     pub format: wgpu::TextureFormat,
     /// Binding (in group 0) and stages of the light camera uniform; the objects are group 1.
     pub view_binding: u32,
+    /// Shader stages that read the light camera uniform.
     pub view_visibility: wgpu::ShaderStages,
     /// What texels where nothing is drawn hold.
     pub clear: wgpu::Color,

@@ -28,7 +28,9 @@ use crate::timing::{self, PassTiming};
 /// the viewer changed) and what is not part of a scene file.
 #[derive(Clone, Debug, Default)]
 pub struct RenderOptions {
+    /// The frame's settings: size, exposure and one group per effect.
     pub settings: RenderSettings,
+    /// Which buffer the output shows: the final image or an intermediate one.
     pub view: DebugView,
     /// Benchmarks: also time a plain full-screen copy of the diffuse target ("copy").
     pub baseline_copy: bool,
@@ -43,10 +45,12 @@ impl RenderOptions {
         }
     }
 
+    /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.settings.width
     }
 
+    /// Image height in pixels.
     pub fn height(&self) -> u32 {
         self.settings.height
     }
@@ -54,20 +58,26 @@ impl RenderOptions {
 
 /// A rendered frame: the tone-mapped sRGB image and the GPU time of each pass.
 pub struct Frame {
+    /// The tone-mapped image (or the debug view), sRGB.
     pub image: image::RgbaImage,
     /// Empty when the adapter has no timestamp queries.
     pub timings: Vec<PassTiming>,
 }
 
 impl Frame {
+    /// GPU time of the whole frame, the sum of the passes', in milliseconds (0 without
+    /// timestamp queries).
     pub fn gpu_total_ms(&self) -> f64 {
         self.timings.iter().map(|t| t.ms).sum()
     }
 }
 
+/// Renders a scene: the GPU resources of every pass, kept between frames.
 pub struct Renderer {
     ctx: GpuContext,
+    /// What the frames are drawn with.
     pub options: RenderOptions,
+    /// What the lighting pass writes and screen-space SSS reads.
     pub targets: LightingTargets,
     object_layout: wgpu::BindGroupLayout,
     objects: Vec<GpuObject>,
@@ -211,6 +221,9 @@ fn thickness_flag(view: DebugView) -> u32 {
 }
 
 impl Renderer {
+    /// Uploads the scene and builds every pass for `options`. Errors when a setting is out of
+    /// range or beyond the device's limits, when the frame exceeds the memory or work budget, or
+    /// when a skin mesh lacks the UVs a texture-space method needs.
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,
@@ -460,6 +473,7 @@ impl Renderer {
         self.ctx.check()
     }
 
+    /// The device and queue it renders with.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
     }

@@ -49,15 +49,19 @@ fn is_true(b: &bool) -> bool {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneDesc {
+    /// The `[camera]` table.
     pub camera: CameraDesc,
+    /// The `[render]` table: the frame's settings, one sub-table per effect.
     #[serde(default)]
     pub render: RenderSettings,
     /// The `[render]` keys the file set itself (key below `[render]`, value as TOML), which
     /// override its quality preset's: kept so that another preset (`--quality`) keeps them.
     #[serde(skip)]
     pub render_keys: RenderKeys,
+    /// The `[[lights]]`, at most 8.
     #[serde(default)]
     pub lights: Vec<LightDesc>,
+    /// The `[[objects]]`.
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
 }
@@ -66,17 +70,22 @@ pub struct SceneDesc {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// Eye position, scene units.
     #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
+    /// The point looked at, scene units; must differ from `position`.
     #[serde(deserialize_with = "exact")]
     pub target: [f32; 3],
+    /// Up vector: non-zero and not parallel to the view direction.
     #[serde(deserialize_with = "exact", default = "d_up")]
     pub up: [f32; 3],
     /// Vertical field of view in degrees, 0 < fov < 180.
     #[serde(default = "d_fov")]
     pub fov_y_deg: f32,
+    /// Near plane distance in scene units, > 0 and at least `far / 1e6`.
     #[serde(default = "d_near")]
     pub near: f32,
+    /// Far plane distance in scene units, > `near`.
     #[serde(default = "d_far")]
     pub far: f32,
 }
@@ -94,11 +103,15 @@ impl Default for CameraDesc {
     }
 }
 
+/// The kind of a light, `kind` in the scene file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightKind {
+    /// Shines in every direction from `position`.
     Point,
+    /// A cone from `position` toward `target`, between the inner and outer half-angles.
     Spot,
+    /// Parallel light along `target - position`, from infinitely far away.
     Directional,
 }
 
@@ -106,21 +119,25 @@ pub enum LightKind {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
+    /// Point, spot or directional.
     pub kind: LightKind,
+    /// Light position, scene units; a directional light uses it only with `target`.
     #[serde(deserialize_with = "exact")]
     pub position: [f32; 3],
     /// Spot and directional: direction = target - position. Unused by point lights.
     #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub target: [f32; 3],
+    /// Linear RGB colour, each >= 0; multiplies `intensity`.
     #[serde(deserialize_with = "exact", default = "d_white")]
     pub color: [f32; 3],
     /// Point/spot: radiant intensity (falls off as 1/d^2 in scene units);
     /// directional: irradiance.
     #[serde(default = "d_one")]
     pub intensity: f32,
-    /// Spot only: half-angles in degrees, 0 < inner <= outer < 90.
+    /// Spot only: half-angle in degrees of the full-intensity cone, 0 < inner <= outer < 90.
     #[serde(default = "d_inner")]
     pub inner_angle_deg: f32,
+    /// Spot only: half-angle in degrees where the light reaches zero.
     #[serde(default = "d_outer")]
     pub outer_angle_deg: f32,
     /// 0 = no shadow map; else 16..=8192.
@@ -151,19 +168,22 @@ impl Default for LightDesc {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
+    /// Label; empty is shown as `objectN`.
     #[serde(default)]
     pub name: String,
+    /// The geometry: a glTF file or a built-in shape.
     pub mesh: MeshDesc,
     /// Millimetres per scene unit of this object's mesh (before `scale`):
     /// 1000 for metres (glTF), ~48 for the Lee Perry-Smith head.
     #[serde(default = "d_mm_per_unit")]
     pub mm_per_unit: f32,
+    /// Position in the scene, scene units.
     #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub translation: [f32; 3],
     /// Euler angles in degrees, `glam::EulerRot::XYZ`: R = Rx * Ry * Rz.
     #[serde(deserialize_with = "exact", default = "d_zero3")]
     pub rotation_deg: [f32; 3],
-    /// Uniform scale.
+    /// Uniform scale, > 0: the object is `scale * mm_per_unit` mm per scene unit.
     #[serde(default = "d_one")]
     pub scale: f32,
     /// Phong tessellation level (Boubekeur & Alexa 2008), 1..=8: each triangle becomes
@@ -173,6 +193,7 @@ pub struct ObjectDesc {
     /// tracer). 1 = the mesh as authored.
     #[serde(default = "d_tessellate", skip_serializing_if = "is_one")]
     pub tessellate: u32,
+    /// Surface and scattering parameters.
     #[serde(default)]
     pub material: MaterialDesc,
 }
@@ -201,26 +222,42 @@ impl ObjectDesc {
 pub enum MeshDesc {
     /// Path relative to the scene file, or [`BUILTIN_HAND`].
     Gltf {
+        /// The `.glb` or `.gltf` file, or [`BUILTIN_HAND`].
         path: String,
     },
+    /// A box centred at the origin; lit from behind along z, a slab of skin.
     Slab {
+        /// Extent along x, the mesh's units.
         width: f32,
+        /// Extent along y, the mesh's units.
         height: f32,
+        /// Extent along z, the mesh's units: the thickness backlight crosses.
         thickness: f32,
     },
+    /// A triangular prism whose thickness along z grows linearly from 0 at x = -length/2 to
+    /// `max_thickness` at x = +length/2: transmittance against thickness in one image.
     Wedge {
+        /// Extent along x, the mesh's units.
         length: f32,
+        /// Extent along y, the mesh's units.
         height: f32,
+        /// Thickness along z at the thick end, the mesh's units.
         max_thickness: f32,
     },
+    /// A UV sphere centred at the origin, poles on y.
     Sphere {
+        /// Radius, the mesh's units.
         radius: f32,
+        /// Segments around the equator, 3..=1024.
         segments: u32,
     },
     /// Closed cylinder along y: a finger's cross-section, the same at every height.
     Cylinder {
+        /// Radius, the mesh's units.
         radius: f32,
+        /// Extent along y, the mesh's units.
         length: f32,
+        /// Segments around the axis, 3..=1024.
         segments: u32,
     },
 }
@@ -416,10 +453,12 @@ pub struct MaterialDesc {
     /// sRGB colour texture, path relative to the scene file (overrides the glTF's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub albedo_texture: Option<String>,
-    /// Tangent-space normal map (overrides the glTF's).
+    /// Tangent-space normal map (linear), path relative to the scene file (overrides the
+    /// glTF's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub normal_texture: Option<String>,
-    /// Specular intensity map (linear, red channel scales `specular`).
+    /// Specular intensity map (linear, red channel scales `specular`), path relative to the
+    /// scene file.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub specular_texture: Option<String>,
     /// glTF meshes: multiply `albedo` by the glTF base colour factor and use
@@ -521,7 +560,10 @@ pub const SKIN_ALBEDO: [f32; 3] = [0.75, 0.5, 0.4];
 /// A scene file's own `[render]` keys ([`SceneDesc::render_keys`]). Not part of what a scene
 /// is: two descriptions with the same settings are equal whichever keys their files spelled.
 #[derive(Clone, Debug, Default)]
-pub struct RenderKeys(pub Vec<(String, String)>);
+pub struct RenderKeys(
+    /// `(key, value)`: the key below `[render]` (`sss.samples`), the value as TOML.
+    pub Vec<(String, String)>,
+);
 
 impl PartialEq for RenderKeys {
     fn eq(&self, _: &Self) -> bool {

@@ -7,31 +7,55 @@ pub enum SceneError {
     /// TOML syntax error, unknown key, wrong type or missing key.
     #[error("{file}{}: {msg}", .line_col.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
     Toml {
+        /// The scene file.
         file: String,
+        /// Line and column of the error, 1-based, where the parser gave them.
         line_col: Option<(usize, usize)>,
+        /// The parser's message, on one line.
         msg: String,
     },
     /// A value out of range (or not finite).
     #[error("{file}: {field}: {msg}")]
     Invalid {
+        /// The scene file.
         file: String,
+        /// The key at fault (`objects[0].mm_per_unit`).
         field: String,
+        /// What was wrong, with the value given.
         msg: String,
     },
     /// A file could not be read.
     #[error("{file}: cannot read: {msg}")]
-    Io { file: String, msg: String },
+    Io {
+        /// The file that could not be read.
+        file: String,
+        /// Why, on one line.
+        msg: String,
+    },
     /// A glTF/GLB file could not be parsed or has no usable mesh.
     #[error("{file}: not a valid glTF file: {msg}")]
-    Gltf { file: String, msg: String },
+    Gltf {
+        /// The glTF or GLB file.
+        file: String,
+        /// Why, on one line.
+        msg: String,
+    },
     /// An image could not be read or decoded.
     #[error("{file}: cannot decode image: {msg}")]
-    Image { file: String, msg: String },
+    Image {
+        /// The image file.
+        file: String,
+        /// Why, on one line.
+        msg: String,
+    },
     /// An error while loading an asset named by a scene field.
     #[error("{file}: {field}: {source}")]
     Asset {
+        /// The scene file.
         file: String,
+        /// The key that names the asset (`objects[0].mesh`).
         field: String,
+        /// The asset's own error.
         source: Box<SceneError>,
     },
 }

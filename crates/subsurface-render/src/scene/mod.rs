@@ -25,6 +25,7 @@ pub const DEFAULT_SCENE_TOML: &str = include_str!("../default_scene.toml");
 /// A scene with meshes and textures decoded.
 #[derive(Clone)]
 pub struct Scene {
+    /// The scene as the file describes it.
     pub desc: SceneDesc,
     /// One per `desc.objects`, same order.
     pub objects: Vec<Object>,
@@ -33,6 +34,7 @@ pub struct Scene {
 /// A loaded object.
 #[derive(Clone)]
 pub struct Object {
+    /// The object's label (`objectN` where the file gives none).
     pub name: String,
     /// Object space (glTF node transforms baked in), with tangents.
     pub mesh: Mesh,
@@ -48,6 +50,7 @@ pub struct Object {
     pub normal_texture: Option<image::RgbaImage>,
     /// Linear specular map.
     pub specular_texture: Option<image::RgbaImage>,
+    /// The object's material as the scene file gives it.
     pub material: MaterialDesc,
 }
 

@@ -38,10 +38,12 @@ impl BounceSettings {
         cell_mm: 2.0,
     };
 
+    /// Whether the bounce runs (`ring` > 0).
     pub fn enabled(&self) -> bool {
         self.ring > 0
     }
 
+    /// Checks each key's range; the error names the key below `bounce`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.ring > MAX_BOUNCE_RING {
             return Err(InvalidSetting::new(

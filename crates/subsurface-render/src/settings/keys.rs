@@ -9,8 +9,11 @@ use super::{InvalidSetting, RenderSettings, SssMethod, TransmittanceMethod};
 /// One setting: its key below `[render]`, its unit and what it does.
 #[derive(Clone, Copy, Debug)]
 pub struct SettingDoc {
+    /// Path below `[render]` (`sss.samples`).
     pub key: &'static str,
+    /// Unit (`mm`, `px`, `linear RGB`); empty for names, flags and plain numbers.
     pub unit: &'static str,
+    /// One line on what the setting does and its range.
     pub doc: &'static str,
 }
 

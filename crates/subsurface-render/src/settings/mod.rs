@@ -57,11 +57,14 @@ method_names!(
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{field}: {message}")]
 pub struct InvalidSetting {
+    /// The setting's path below `[render]` (`sss.samples`).
     pub field: String,
+    /// The rule broken and the value given.
     pub message: String,
 }
 
 impl InvalidSetting {
+    /// An error for `field`.
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
         Self {
             field: field.into(),
@@ -110,7 +113,9 @@ pub struct RenderSettings {
     /// A scene file without one takes the default preset.
     #[serde(default)]
     pub quality: Quality,
+    /// Image width in pixels, 1..=16384 and within the device's limit.
     pub width: u32,
+    /// Image height in pixels, 1..=16384 and within the device's limit.
     pub height: u32,
     /// Exposure in stops: radiance is multiplied by 2^ev before tone mapping.
     pub exposure_ev: f32,

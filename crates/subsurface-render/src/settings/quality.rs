@@ -19,8 +19,10 @@ pub enum Quality {
 }
 
 impl Quality {
+    /// Every preset, cheapest first.
     pub const ALL: [Quality; 3] = [Quality::Low, Quality::Medium, Quality::High];
 
+    /// The scene-file and command-line spelling (`"medium"`).
     pub fn name(self) -> &'static str {
         match self {
             Quality::Low => "low",

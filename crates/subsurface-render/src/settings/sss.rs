@@ -25,6 +25,7 @@ pub enum SssMethod {
 }
 
 impl SssMethod {
+    /// Every method.
     pub const ALL: [SssMethod; 5] = [
         SssMethod::None,
         SssMethod::Gaussian6,
@@ -76,6 +77,7 @@ pub enum SssFetch {
 }
 
 impl SssFetch {
+    /// Every fetch mode.
     pub const ALL: [SssFetch; 3] = [SssFetch::Packed, SssFetch::Direct, SssFetch::Workgroup];
 
     /// The name in scene files and on the command line.
@@ -95,6 +97,7 @@ pub const MAX_SAMPLES: u32 = 63;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SssSettings {
+    /// Which method blurs the diffuse radiance.
     pub method: SssMethod,
     /// Separable: number of kernel taps (odd, 3..=63).
     pub samples: u32,
@@ -149,6 +152,7 @@ impl Default for SssSettings {
 }
 
 impl SssSettings {
+    /// Checks each key's range; the error names the key below `sss`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         let n = self.samples;
         if !(3..=MAX_SAMPLES).contains(&n) || n.is_multiple_of(2) {

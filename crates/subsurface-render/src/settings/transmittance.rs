@@ -36,6 +36,7 @@ pub enum TransmittanceMethod {
 }
 
 impl TransmittanceMethod {
+    /// Every method, in the order of their codes.
     pub const ALL: [TransmittanceMethod; 6] = [
         TransmittanceMethod::Off,
         TransmittanceMethod::Paper,
@@ -88,6 +89,7 @@ pub enum LateralPass {
 }
 
 impl LateralPass {
+    /// Both evaluations.
     pub const ALL: [LateralPass; 2] = [LateralPass::Compute, LateralPass::Fragment];
 
     /// The name in scene files and on the command line.
@@ -103,6 +105,7 @@ impl LateralPass {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TransmittanceSettings {
+    /// How light through thin parts is computed.
     pub method: TransmittanceMethod,
     /// How far (scene units) a shaded point moves inward along its vertex normal before the
     /// shadow-map lookup (000_* uses 0.005), so it does not find itself in the map.
@@ -187,6 +190,7 @@ impl Default for TransmittanceSettings {
 }
 
 impl TransmittanceSettings {
+    /// Checks each key's range; the error names the key below `transmittance`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         check(
             "normal_shrink",

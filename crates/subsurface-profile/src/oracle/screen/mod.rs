@@ -33,7 +33,9 @@ use crate::kernel::{GAUSSIAN7_OFFSETS_SIGMA, GAUSSIAN7_WEIGHTS, ScreenKernels};
 /// G-buffer data the passes read.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScreenInput {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// Linear HDR diffuse radiance.
     pub color: Vec<[f32; 3]>,

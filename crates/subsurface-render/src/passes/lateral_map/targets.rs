@@ -19,11 +19,15 @@ pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float
 /// (0: nothing there); the bounce's layer comes after them (`bounce_layer`). And the z-buffer of
 /// that resolution.
 pub struct LateralTargets {
+    /// Pixels per texel along each axis.
     pub downsample: u32,
     /// Layers of `map`.
     pub layer_count: u32,
+    /// Width in texels, `ceil(frame width / downsample)`.
     pub width: u32,
+    /// Height in texels, `ceil(frame height / downsample)`.
     pub height: u32,
+    /// The array texture of all layers.
     pub map: wgpu::Texture,
     pub(super) layers: Vec<wgpu::TextureView>,
     pub(super) zbuffer: wgpu::TextureView,

@@ -36,6 +36,8 @@ use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
+/// The lighting shader's WGSL: common declarations, lighting.wgsl and the shadow, transmittance,
+/// bounce and lateral-map code it calls.
 pub const SHADER: &str = concat!(
     include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),
@@ -165,6 +167,8 @@ fn lighting_pipeline(
     .create(device)
 }
 
+/// Lights every pixel: writes diffuse and specular radiance, linear depth and the SSS inputs
+/// ([`LightingTargets`]), with the lights' shadows, transmittance and the bounce.
 pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,

@@ -6,7 +6,9 @@ use crate::gpu::GpuContext;
 use crate::passes::lateral_map::{LATERAL_FORMAT, LateralTargets};
 use crate::passes::util;
 
+/// Texel format of the diffuse and specular radiance targets: linear HDR.
 pub const RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Texel format of the linear depth target, scene units.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 /// r = SSS strength, g = scene units per profile millimetre, b = profile index (exact in f16
 /// up to 2048), a unused. Half floats keep the four targets within the 32 bytes per sample
@@ -15,7 +17,9 @@ pub const SSS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// What the lighting pass writes, and what screen-space SSS reads.
 pub struct LightingTargets {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// Diffuse radiance (irradiance x albedo), linear HDR: the image that is blurred.
     pub diffuse: wgpu::Texture,

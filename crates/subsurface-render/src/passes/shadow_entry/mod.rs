@@ -17,6 +17,7 @@ use wgpu::util::DeviceExt;
 use crate::passes::{fullscreen, shadow, util};
 use crate::timing::TimedPass;
 
+/// The pass's WGSL: the full-screen triangle, common declarations and shadow_entry.wgsl.
 pub const SHADER: &str = concat!(
     include_str!("../fullscreen.wgsl"),
     include_str!("../common.wgsl"),

@@ -105,8 +105,11 @@ struct SssUniform {
 /// lighting pass writes Rgba16Float, and the packed fetch keeps strength and scale at that
 /// f16 precision whatever the format: use the direct fetch for f32 scales).
 pub struct SssInputs<'a> {
+    /// Diffuse radiance, linear HDR: blurred in place.
     pub diffuse: &'a wgpu::Texture,
+    /// Linear view depth in scene units.
     pub depth: &'a wgpu::TextureView,
+    /// r = SSS strength, g = scene units per profile millimetre, b = profile row.
     pub sss: &'a wgpu::TextureView,
 }
 
@@ -202,6 +205,7 @@ impl SssPass {
         Ok(pass)
     }
 
+    /// The settings the pass was built for.
     pub fn settings(&self) -> &SssSettings {
         &self.settings
     }

@@ -55,7 +55,9 @@ struct BlurStepPass {
 /// Gaussians and `widest` the padded widest Gaussian (both `Rgba16Float`, alpha 1 on the
 /// islands, 0.5 in the padding, 0 elsewhere).
 pub struct BlurTargets {
+    /// The padded sum of the profile's Gaussians: the blurred irradiance.
     pub result: wgpu::Texture,
+    /// The padded widest Gaussian alone, which translucent shadow maps read.
     pub widest: wgpu::Texture,
     /// The accumulated sum before padding.
     pub accum: wgpu::Texture,
@@ -68,15 +70,18 @@ pub struct BlurTargets {
 }
 
 impl BlurTargets {
+    /// A view of `result`.
     pub fn result_view(&self) -> &wgpu::TextureView {
         &self.result_view
     }
+    /// A view of `widest`.
     pub fn widest_view(&self) -> &wgpu::TextureView {
         &self.widest_view
     }
 }
 
 impl TextureBlur {
+    /// Builds the pipelines.
     pub fn new(device: &wgpu::Device) -> Self {
         let module = util::wgsl_module(device, "texture_space/blur.wgsl", SHADER);
         // The stretch map is Rg32Float; the blur reads texels without a sampler anyway.

@@ -15,6 +15,8 @@ use crate::passes::maps::{MAP_FORMAT, STRETCH_FORMAT};
 use crate::passes::util;
 use crate::timing::TimedPass;
 
+/// The irradiance pass's WGSL: the lighting shader with irradiance.wgsl's UV-space entry
+/// points.
 pub const SHADER: &str = concat!(
     include_str!("../ids.wgsl"),
     include_str!("../common.wgsl"),

@@ -240,6 +240,7 @@ impl TextureSpacePass {
         })
     }
 
+    /// The settings the maps were made for.
     pub fn settings(&self) -> &TextureSpaceSettings {
         &self.settings
     }

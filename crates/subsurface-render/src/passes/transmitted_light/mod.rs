@@ -36,6 +36,7 @@ use crate::settings::{RenderSettings, TransmittanceMethod};
 use crate::timing::TimedPass;
 use crate::uniforms::ObjectUniform;
 
+/// The pass's WGSL: the lighting shader's files and transmitted_light.wgsl.
 pub const SHADER: &str = concat!(
     include_str!("../fullscreen.wgsl"),
     include_str!("../ids.wgsl"),
@@ -69,7 +70,9 @@ pub struct SkinGBuffer<'a> {
 
 /// One medium's group 1: its [`ObjectUniform`] (optics, boundary, scale) and T(s) tables.
 pub struct SkinMedium {
+    /// Group 1 of the pass: the uniform and the medium's T(s) tables.
     pub bind_group: wgpu::BindGroup,
+    /// The medium's [`ObjectUniform`].
     pub uniform: wgpu::Buffer,
 }
 

@@ -32,6 +32,7 @@ impl std::ops::Deref for TsmPass {
 }
 
 impl TsmPass {
+    /// One translucent-shadow-map layer per shadow layer, `atlas_size` texels square.
     pub fn new(
         ctx: &GpuContext,
         object_layout: &wgpu::BindGroupLayout,
