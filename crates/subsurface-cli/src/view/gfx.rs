@@ -187,15 +187,9 @@ pub fn color_pass<'e>(
 ) -> wgpu::RenderPass<'e> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load,
-                store: wgpu::StoreOp::Store,
-            },
-        })],
+        color_attachments: &[subsurface_render::passes::util::color_attachment(
+            view, load,
+        )],
         depth_stencil_attachment: None,
         timestamp_writes: None,
         occlusion_query_set: None,

@@ -38,17 +38,7 @@ use crate::uniforms::{CameraUniform, LightsUniform};
 
 /// The lighting shader's WGSL: common declarations, lighting.wgsl and the shadow, transmittance,
 /// bounce and lateral-map code it calls.
-pub const SHADER: &str = concat!(
-    include_str!("../ids.wgsl"),
-    include_str!("../common.wgsl"),
-    include_str!("../bindings/frame.wgsl"),
-    include_str!("../bindings/object.wgsl"),
-    include_str!("lighting.wgsl"),
-    include_str!("../shadow_lookup.wgsl"),
-    include_str!("../transmittance.wgsl"),
-    include_str!("../bounce.wgsl"),
-    include_str!("../lateral_map/lateral.wgsl")
-);
+pub const SHADER: &str = lighting_shader!(include_str!("../lateral_map/lateral.wgsl"));
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
 /// `shadow_depth` and `shadow_compare` in lighting.wgsl, `flux_position`, `flux_normal` and

@@ -17,17 +17,7 @@ use crate::timing::TimedPass;
 
 /// The irradiance pass's WGSL: the lighting shader with irradiance.wgsl's UV-space entry
 /// points.
-pub const SHADER: &str = concat!(
-    include_str!("../ids.wgsl"),
-    include_str!("../common.wgsl"),
-    include_str!("../bindings/frame.wgsl"),
-    include_str!("../bindings/object.wgsl"),
-    include_str!("../lighting/lighting.wgsl"),
-    include_str!("../shadow_lookup.wgsl"),
-    include_str!("../transmittance.wgsl"),
-    include_str!("../bounce.wgsl"),
-    include_str!("irradiance.wgsl")
-);
+pub const SHADER: &str = lighting_shader!(include_str!("irradiance.wgsl"));
 
 /// The UV-space irradiance pipeline; shared by every object.
 pub struct IrradiancePass {

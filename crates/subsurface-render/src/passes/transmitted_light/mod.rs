@@ -37,17 +37,8 @@ use crate::timing::TimedPass;
 use crate::uniforms::ObjectUniform;
 
 /// The pass's WGSL: the lighting shader's files and transmitted_light.wgsl.
-pub const SHADER: &str = concat!(
+pub const SHADER: &str = lighting_shader!(
     include_str!("../fullscreen.wgsl"),
-    include_str!("../ids.wgsl"),
-    include_str!("../common.wgsl"),
-    include_str!("../bindings/frame.wgsl"),
-    include_str!("../bindings/object.wgsl"),
-    include_str!("../lighting/lighting.wgsl"),
-    include_str!("../shadow_lookup.wgsl"),
-    include_str!("../transmittance.wgsl"),
-    include_str!("../bounce.wgsl"),
-    include_str!("../lateral_map/lateral.wgsl"),
     include_str!("transmitted_light.wgsl")
 );
 
