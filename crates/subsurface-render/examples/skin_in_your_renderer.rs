@@ -41,6 +41,7 @@ use subsurface_render::passes::sss::{SssInputs, SssPass};
 use subsurface_render::passes::tonemap::{self, ToneMapInputs, ToneMapPass};
 use subsurface_render::passes::transmitted_light::{SkinGBuffer, SkinMedium, TransmittedLightPass};
 use subsurface_render::passes::{maps, util};
+use subsurface_render::timing::{self, PassTiming, TimedPass};
 use subsurface_render::uniforms::{CameraUniform, LightsUniform};
 use subsurface_render::{DebugView, GpuContext, RenderError, RenderSettings, Scene, readback};
 
@@ -282,7 +283,7 @@ pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
     skin: bool,
-) -> Result<image::RgbaImage, RenderError> {
+) -> Result<(image::RgbaImage, Vec<PassTiming>), RenderError> {
     let device = &ctx.device;
     let (width, height) = (settings.width, settings.height);
     let camera: CameraUniform = camera_uniform(scene, width, height);
@@ -559,7 +560,10 @@ pub fn render(
     let views = [&diffuse, &specular, &depth, &sss, &normal, &albedo].map(tv);
     let zview = tv(&zbuffer);
 
+    // GPU time per pass: ours (`shadow`, `g-buffer`, `forward`) and the library's.
+    let mut profiler = timing::new_profiler(device)?;
     let mut encoder = device.create_command_encoder(&Default::default());
+    let p = Some(&profiler);
     for (i, layer) in setup.layers.iter().enumerate() {
         let data = ViewUniform {
             view_proj: layer.view_proj.to_cols_array_2d(),
@@ -579,6 +583,7 @@ pub fn render(
             [(0, uniform.as_entire_binding())],
         );
         let target = util::layer_view(&shadow_depth, i as u32);
+        let timer = TimedPass::begin(p, "shadow", &mut encoder);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
@@ -587,7 +592,7 @@ pub fn render(
                 wgpu::LoadOp::Clear(1.0),
                 wgpu::StoreOp::Store,
             ),
-            timestamp_writes: None,
+            timestamp_writes: timer.writes(),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -596,6 +601,8 @@ pub fn render(
         pass.set_pipeline(&shadow_pipeline);
         pass.set_bind_group(0, &group, &[]);
         draw(&mut pass, &meshes);
+        drop(pass);
+        timer.end(p, &mut encoder);
     }
     let bg = settings.background;
     let clear = |r: f32, g: f32, b: f32| {
@@ -607,6 +614,7 @@ pub fn render(
         })
     };
     {
+        let timer = TimedPass::begin(p, "g-buffer", &mut encoder);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("g-buffer"),
             color_attachments: &[
@@ -618,16 +626,19 @@ pub fn render(
                 wgpu::LoadOp::Clear(1.0),
                 wgpu::StoreOp::Store,
             ),
-            timestamp_writes: None,
+            timestamp_writes: timer.writes(),
             occlusion_query_set: None,
             multiview_mask: None,
         });
         pass.set_pipeline(&gbuffer_pipeline);
         pass.set_bind_group(0, &view_group, &[]);
         draw(&mut pass, &meshes);
+        drop(pass);
+        timer.end(p, &mut encoder);
     }
     {
         let far = scene.desc.camera.far;
+        let timer = TimedPass::begin(p, "forward", &mut encoder);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("forward"),
             color_attachments: &[
@@ -641,13 +652,15 @@ pub fn render(
                 wgpu::LoadOp::Load,
                 wgpu::StoreOp::Discard,
             ),
-            timestamp_writes: None,
+            timestamp_writes: timer.writes(),
             occlusion_query_set: None,
             multiview_mask: None,
         });
         pass.set_pipeline(&forward_pipeline);
         pass.set_bind_group(0, &view_group, &[]);
         draw(&mut pass, &meshes);
+        drop(pass);
+        timer.end(p, &mut encoder);
     }
 
     // The library's passes, on the program's textures. They are built here each frame for a
@@ -707,9 +720,9 @@ pub fn render(
     };
     let gbuffer = transmitted.bind_gbuffer(device, &gbuffer, view_proj);
     if skin {
-        entry.encode(&mut encoder, None);
+        entry.encode(&mut encoder, p);
         if let Some(flux) = &flux {
-            flux.encode(&mut encoder, None);
+            flux.encode(&mut encoder, p);
         }
         transmitted.encode(
             &mut encoder,
@@ -717,7 +730,7 @@ pub fn render(
             &gbuffer,
             &media,
             [&views[0], &views[1]],
-            None,
+            p,
         );
         blur.resize(
             device,
@@ -728,7 +741,7 @@ pub fn render(
             },
         );
         blur.prepare(&ctx.queue, camera.focal_px);
-        blur.encode(&mut encoder, None);
+        blur.encode(&mut encoder, p);
     }
 
     // Tone mapping into an sRGB image.
@@ -754,15 +767,20 @@ pub fn render(
         depth: &views[2],
         sss: &views[3],
     };
-    tone.encode(
-        &mut encoder,
-        &tone.bind(device, &inputs),
-        &tv(&output),
-        None,
-    );
+    tone.encode(&mut encoder, &tone.bind(device, &inputs), &tv(&output), p);
+    profiler.resolve_queries(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
     ctx.check()?;
-    readback::read_rgba8(ctx, &output)
+    let image = readback::read_rgba8(ctx, &output)?;
+    profiler
+        .end_frame()
+        .map_err(|e| RenderError::Validation(format!("profiler: {e}")))?;
+    let _ = device.poll(wgpu::PollType::wait_indefinitely());
+    let results = profiler.process_finished_frame(ctx.queue.get_timestamp_period());
+    Ok((
+        image,
+        results.map_or_else(Vec::new, |r| timing::collect(&r)),
+    ))
 }
 
 fn draw(pass: &mut wgpu::RenderPass<'_>, meshes: &[Mesh]) {
@@ -786,10 +804,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         (true, "skin_in_your_renderer.png"),
         (false, "skin_in_your_renderer_without_skin.png"),
     ] {
-        let image = render(&ctx, &scene, &settings, skin)?;
+        let (image, timings) = render(&ctx, &scene, &settings, skin)?;
         let path = out_dir.join(name);
         image.save(&path)?;
-        println!("wrote {}", path.display());
+        let passes: Vec<String> = timings
+            .iter()
+            .map(|t| format!("{} {:.2} ms", t.name, t.ms))
+            .collect();
+        println!("wrote {} (GPU: {})", path.display(), passes.join(", "));
     }
     Ok(())
 }

@@ -40,8 +40,8 @@ fn check_against_renderer(
     settings: &subsurface_render::RenderSettings,
     name: &str,
 ) {
-    let theirs = example::render(ctx, scene, settings, true).unwrap();
-    let without = example::render(ctx, scene, settings, false).unwrap();
+    let theirs = example::render(ctx, scene, settings, true).unwrap().0;
+    let without = example::render(ctx, scene, settings, false).unwrap().0;
     let options = RenderOptions {
         settings: settings.clone(),
         ..Default::default()
