@@ -1,0 +1,167 @@
+//! The skin material: Bevy's `StandardMaterial` extended with a scattering medium and width.
+//!
+//! Every distinct (medium, width) pair among the skin materials is one row of the profile
+//! table that the blur reads ([`SkinMedia`]); a material's pixels carry their row.
+
+use bevy::asset::{Asset, AssetId, Assets};
+use bevy::ecs::prelude::*;
+use bevy::pbr::{ExtendedMaterial, MaterialExtension, StandardMaterial};
+use bevy::platform::collections::HashSet;
+use bevy::reflect::Reflect;
+use bevy::render::RenderApp;
+use bevy::render::extract_resource::ExtractResource;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::render_resource::{AsBindGroup, AsBindGroupShaderType, ShaderType};
+use bevy::render::texture::GpuImage;
+use bevy::shader::ShaderRef;
+
+use crate::SubsurfaceError;
+
+/// Most rows of the profile table: the marker pass's uniform holds this many scales
+/// (mark.wgsl's `array<vec4<f32>, 64>`).
+pub const MAX_ROWS: usize = 256;
+
+/// A skin: Bevy's PBR material whose diffuse light scatters under the surface.
+pub type SkinMaterial = ExtendedMaterial<StandardMaterial, Skin>;
+
+/// The scattering part of a [`SkinMaterial`].
+#[derive(Asset, AsBindGroup, Reflect, Clone, Debug)]
+#[uniform(100, SkinUniform)]
+pub struct Skin {
+    /// The medium: a preset of subsurface-profile (`"skin"`, d'Eon's skin profile, or a
+    /// measured medium of Jensen et al. 2001 such as `"skin1"`, `"marble"`).
+    pub medium: String,
+    /// Multiplier on the physical size of the scattering profile, > 0.
+    pub width: f32,
+    /// This material's row of [`SkinMedia`], set by the plugin (`None` until then, or when
+    /// the medium or width is invalid: the material is then drawn as plain PBR).
+    #[reflect(ignore)]
+    pub(crate) row: Option<u32>,
+}
+
+impl Skin {
+    pub fn new(medium: impl Into<String>, width: f32) -> Self {
+        Self {
+            medium: medium.into(),
+            width,
+            row: None,
+        }
+    }
+}
+
+impl Default for Skin {
+    fn default() -> Self {
+        Self::new("skin", 1.0)
+    }
+}
+
+/// `SkinUniform` of skin.wesl.
+#[derive(Clone, Default, ShaderType)]
+pub struct SkinUniform {
+    pub marker: f32,
+}
+
+impl AsBindGroupShaderType<SkinUniform> for Skin {
+    fn as_bind_group_shader_type(&self, _images: &RenderAssets<GpuImage>) -> SkinUniform {
+        SkinUniform {
+            // 1 is what an opaque material writes anyway: "not skin".
+            marker: self.row.map_or(1.0, |row| -(row as f32 + 1.0)),
+        }
+    }
+}
+
+impl MaterialExtension for Skin {
+    fn fragment_shader() -> ShaderRef {
+        "embedded://subsurface_bevy/skin.wesl".into()
+    }
+}
+
+/// One row of the profile table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkinRow {
+    pub medium: String,
+    pub width: f32,
+}
+
+/// The profile table: every (medium, width) pair the skin materials have used, in order of
+/// first use. Rows are never removed, so a row number stays valid for the app's life.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SkinMedia {
+    pub rows: Vec<SkinRow>,
+}
+
+impl SkinMedia {
+    /// The row of this medium and width, added if new. The medium must be a known preset.
+    pub fn row(&mut self, medium: &str, width: f32) -> Result<u32, SubsurfaceError> {
+        if !(width.is_finite() && width > 0.0) {
+            return Err(SubsurfaceError::Width(width));
+        }
+        subsurface_profile::Medium::Preset(medium.to_string())
+            .material()
+            .map_err(|e| SubsurfaceError::Medium(medium.to_string(), e.to_string()))?;
+        let key = SkinRow {
+            medium: medium.to_string(),
+            width,
+        };
+        if let Some(i) = self.rows.iter().position(|r| *r == key) {
+            return Ok(i as u32);
+        }
+        if self.rows.len() == MAX_ROWS {
+            return Err(SubsurfaceError::TooManyRows { max: MAX_ROWS });
+        }
+        self.rows.push(key);
+        Ok(self.rows.len() as u32 - 1)
+    }
+}
+
+impl ExtractResource<RenderApp> for SkinMedia {
+    type Source = SkinMedia;
+
+    fn extract_resource(source: &Self::Source) -> Self {
+        source.clone()
+    }
+}
+
+/// Gives each skin material its row. A material whose row is already right is not touched,
+/// so this changes (and re-uploads) a material only when it is new or its medium or width
+/// changed. An invalid medium or width is logged once per material and leaves the material
+/// drawn as plain PBR.
+pub(crate) fn assign_rows(
+    mut materials: ResMut<Assets<SkinMaterial>>,
+    mut media: ResMut<SkinMedia>,
+    mut reported: Local<HashSet<AssetId<SkinMaterial>>>,
+) {
+    let rows_before = media.rows.len();
+    let mut updates = Vec::new();
+    for (id, m) in materials.iter() {
+        let skin = &m.extension;
+        // Change detection on the table is set below only when a row was added: looking a
+        // row up every frame must not re-extract the table every frame.
+        let row = match media
+            .bypass_change_detection()
+            .row(&skin.medium, skin.width)
+        {
+            Ok(row) => {
+                reported.remove(&id);
+                Some(row)
+            }
+            Err(e) => {
+                if reported.insert(id) {
+                    log::error!("subsurface: {e}; the material is drawn without scattering");
+                }
+                None
+            }
+        };
+        if row != skin.row {
+            updates.push((id, row));
+        }
+    }
+    for (id, row) in updates {
+        if let Some(mut m) = materials.get_mut(id) {
+            m.extension.row = row;
+        }
+    }
+    if media.rows.len() != rows_before {
+        media.set_changed();
+    }
+}
