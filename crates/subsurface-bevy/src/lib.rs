@@ -28,15 +28,17 @@
 //!
 //! What happens each frame, for every camera with [`Subsurface`]:
 //! 1. The skin material ([`SkinMaterial`]: Bevy's `StandardMaterial` extended by [`Skin`])
-//!    lights its pixels with Bevy's own PBR code in Bevy's main opaque pass, and marks them
-//!    as skin in the alpha channel of the camera's HDR texture (`skin.wesl`).
+//!    lights its pixels with Bevy's own PBR code in Bevy's main opaque pass, diffuse light
+//!    only, and marks them as skin in the alpha channel of the camera's HDR texture
+//!    (`skin.wesl`).
 //! 2. Between Bevy's opaque and transparent passes, [`render`]'s step turns the camera's
 //!    depth buffer and that marker into subsurface-render's inputs (linear depth; strength,
 //!    scale, profile row) and runs `SssPass` on the HDR texture itself.
+//! 3. Bevy's transparent pass then adds the skin's specular light, drawn by a child entity
+//!    ([`SkinSpecular`]) with an additive twin of the material: highlights stay sharp.
 //!
-//! Limits of this first version: the blur applies to the whole lit colour of skin pixels
-//! (Bevy's forward pass writes diffuse and specular light summed), there is no transmittance
-//! yet, cameras need `Msaa::Off` (the plugin sets it) and a perspective projection.
+//! Limits of this version: no transmittance yet; cameras need `Msaa::Off` (the plugin sets
+//! it) and a perspective projection; each skin mesh is drawn twice in the main passes.
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
@@ -53,7 +55,7 @@ use bevy::render::view::Msaa;
 mod material;
 pub mod render;
 
-pub use material::{Skin, SkinMaterial, SkinMedia, SkinRow};
+pub use material::{Skin, SkinMaterial, SkinMedia, SkinRow, SkinSpecular};
 pub use subsurface_render::settings::Quality;
 
 /// Errors of this crate. Nothing in the library panics on bad input: a medium that is not
@@ -112,12 +114,22 @@ impl Plugin for SubsurfacePlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "skin.wesl");
         app.init_resource::<SkinMedia>()
+            .init_resource::<material::SpecularTwins>()
             .add_plugins((
                 MaterialPlugin::<SkinMaterial>::default(),
                 ExtractComponentPlugin::<Subsurface>::default(),
                 ExtractResourcePlugin::<SkinMedia>::default(),
             ))
-            .add_systems(PostUpdate, (material::assign_rows, prepare_cameras));
+            .add_systems(
+                PostUpdate,
+                (
+                    material::assign_rows,
+                    material::spawn_specular_twins,
+                    material::sync_specular_twins,
+                    prepare_cameras,
+                )
+                    .chain(),
+            );
         render::build(app);
     }
 }

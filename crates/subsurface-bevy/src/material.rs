@@ -2,10 +2,22 @@
 //!
 //! Every distinct (medium, width) pair among the skin materials is one row of the profile
 //! table that the blur reads ([`SkinMedia`]); a material's pixels carry their row.
+//!
+//! Bevy's forward pass writes one colour per pixel, so diffuse and specular light are drawn
+//! apart: the skin mesh itself draws its diffuse light (opaque, blurred by the render step),
+//! and a child entity the plugin adds ([`SkinSpecular`]) draws the same mesh again with a twin
+//! of the material in `AlphaMode::Add`, which Bevy draws in its transparent pass, after the
+//! blur: the specular light is added on top, sharp.
 
-use bevy::asset::{Asset, AssetId, Assets};
+use bevy::asset::{Asset, AssetEvent, AssetId, Assets, Handle};
+use bevy::ecs::message::MessageReader;
 use bevy::ecs::prelude::*;
+use bevy::light::NotShadowCaster;
+use bevy::material::AlphaMode;
+use bevy::mesh::Mesh3d;
+use bevy::pbr::MeshMaterial3d;
 use bevy::pbr::{ExtendedMaterial, MaterialExtension, StandardMaterial};
+use bevy::platform::collections::HashMap;
 use bevy::platform::collections::HashSet;
 use bevy::reflect::Reflect;
 use bevy::render::RenderApp;
@@ -14,6 +26,7 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::render_resource::{AsBindGroup, AsBindGroupShaderType, ShaderType};
 use bevy::render::texture::GpuImage;
 use bevy::shader::ShaderRef;
+use bevy::transform::components::Transform;
 
 use crate::SubsurfaceError;
 
@@ -37,6 +50,9 @@ pub struct Skin {
     /// the medium or width is invalid: the material is then drawn as plain PBR).
     #[reflect(ignore)]
     pub(crate) row: Option<u32>,
+    /// True for the specular twin the plugin draws over the skin (see [`SkinSpecular`]).
+    #[reflect(ignore)]
+    pub(crate) specular: bool,
 }
 
 impl Skin {
@@ -45,6 +61,7 @@ impl Skin {
             medium: medium.into(),
             width,
             row: None,
+            specular: false,
         }
     }
 }
@@ -59,6 +76,7 @@ impl Default for Skin {
 #[derive(Clone, Default, ShaderType)]
 pub struct SkinUniform {
     pub marker: f32,
+    pub specular: u32,
 }
 
 impl AsBindGroupShaderType<SkinUniform> for Skin {
@@ -66,6 +84,7 @@ impl AsBindGroupShaderType<SkinUniform> for Skin {
         SkinUniform {
             // 1 is what an opaque material writes anyway: "not skin".
             marker: self.row.map_or(1.0, |row| -(row as f32 + 1.0)),
+            specular: self.specular as u32,
         }
     }
 }
@@ -163,5 +182,91 @@ pub(crate) fn assign_rows(
     }
     if media.rows.len() != rows_before {
         media.set_changed();
+    }
+}
+
+/// The child entity that draws a skin mesh's specular light (see the module's
+/// documentation). It casts no shadow: the skin mesh does.
+#[derive(Component, Clone, Copy, Debug)]
+pub struct SkinSpecular;
+
+/// Each skin material's specular twin.
+#[derive(Resource, Default)]
+pub(crate) struct SpecularTwins(HashMap<AssetId<SkinMaterial>, Handle<SkinMaterial>>);
+
+fn twin_of(material: &SkinMaterial) -> SkinMaterial {
+    let mut twin = material.clone();
+    twin.base.alpha_mode = AlphaMode::Add;
+    twin.extension.specular = true;
+    twin
+}
+
+/// Gives every skin mesh its specular child (again when its mesh or material changes).
+#[allow(clippy::type_complexity)]
+pub(crate) fn spawn_specular_twins(
+    mut commands: Commands,
+    skins: Query<
+        (Entity, &Mesh3d, &MeshMaterial3d<SkinMaterial>),
+        (
+            Without<SkinSpecular>,
+            Or<(Changed<MeshMaterial3d<SkinMaterial>>, Changed<Mesh3d>)>,
+        ),
+    >,
+    children: Query<&Children>,
+    specular: Query<(), With<SkinSpecular>>,
+    mut twins: ResMut<SpecularTwins>,
+    mut materials: ResMut<Assets<SkinMaterial>>,
+) {
+    for (entity, mesh, material) in &skins {
+        for child in children.get(entity).into_iter().flatten() {
+            if specular.contains(*child) {
+                commands.entity(*child).despawn();
+            }
+        }
+        let id = material.id();
+        let twin = match twins.0.get(&id) {
+            Some(twin) => twin.clone(),
+            None => {
+                let Some(copy) = materials.get(id).map(twin_of) else {
+                    continue;
+                };
+                let twin = materials.add(copy);
+                twins.0.insert(id, twin.clone());
+                twin
+            }
+        };
+        commands.spawn((
+            Mesh3d(mesh.0.clone()),
+            MeshMaterial3d(twin),
+            // The parent's transform exactly, so the twin's depth equals the skin's and
+            // passes the transparent pass's depth test.
+            Transform::IDENTITY,
+            NotShadowCaster,
+            SkinSpecular,
+            ChildOf(entity),
+        ));
+    }
+}
+
+/// Keeps each twin a copy of its skin material (base parameters, medium, width).
+pub(crate) fn sync_specular_twins(
+    mut events: MessageReader<AssetEvent<SkinMaterial>>,
+    twins: Res<SpecularTwins>,
+    mut materials: ResMut<Assets<SkinMaterial>>,
+) {
+    for event in events.read() {
+        let AssetEvent::Modified { id } = event else {
+            continue;
+        };
+        // Twins' own events are not keys of the map, so this does not feed itself.
+        let Some(twin) = twins.0.get(id) else {
+            continue;
+        };
+        let Some(copy) = materials.get(*id).map(twin_of) else {
+            continue;
+        };
+        if let Some(mut t) = materials.get_mut(twin) {
+            *t = copy;
+        }
     }
 }

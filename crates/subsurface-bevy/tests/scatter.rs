@@ -10,6 +10,11 @@ use common::*;
 use subsurface_bevy::{Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
 
 fn render(with_subsurface: bool) -> Vec<u8> {
+    render_skin(with_subsurface, 0.6, 20.0)
+}
+
+/// The scene of `common::spawn_scene` with a skin sphere of this roughness and width.
+fn render_skin(with_subsurface: bool, roughness: f32, width: f32) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = if with_subsurface {
@@ -24,12 +29,12 @@ fn render(with_subsurface: bool) -> Vec<u8> {
         .add(SkinMaterial {
             base: StandardMaterial {
                 base_color: Color::linear_rgb(0.8, 0.5, 0.4),
-                perceptual_roughness: 0.6,
+                perceptual_roughness: roughness,
                 ..default()
             },
-            // The sphere has a radius of 1 m; a width of 20 makes the profile about a
-            // centimetre wide, a few pixels at this resolution.
-            extension: Skin::new("skin1", 20.0),
+            // The sphere has a radius of 1 m, 30 pixels here: a width of 20 makes a
+            // profile millimetre 2 cm, a fraction of a pixel, the profile a few pixels.
+            extension: Skin::new("skin1", width),
         });
     spawn_scene(&mut h.app, MeshMaterial3d(skin));
     render_until_stable(&mut h, 600)
@@ -90,4 +95,69 @@ fn subsurface_changes_skin_and_nothing_else() {
     // silhouette's depth edges, where taps are cut).
     let ratio = energy_on / energy_off;
     assert!((0.9..1.05).contains(&ratio), "skin energy ratio {ratio}");
+}
+
+fn luminance(p: [f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// The skin's specular light is drawn after the blur (by the additive twin), so a sharp
+/// highlight keeps its peak while the diffuse light around it scatters. Blurring the
+/// highlight with the diffuse light would lower its peak (measured in docs/lab/bevy.md).
+#[test]
+fn specular_highlight_stays_sharp() {
+    if !gpu_available() {
+        return;
+    }
+    // Glossy skin and a wide profile, so that the blur is several pixels wide.
+    let off = render_skin(false, 0.25, 100.0);
+    let on = render_skin(true, 0.25, 100.0);
+    dump(&off, "specular_off");
+    dump(&on, "specular_on");
+
+    let skin: Vec<(u32, u32)> = (0..HEIGHT)
+        .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
+        .filter(|&(x, y)| pixel(&off, x, y)[3] < 0.0)
+        .collect();
+    let &(px, py) = skin
+        .iter()
+        .max_by(|a, b| {
+            luminance(pixel(&off, a.0, a.1)).total_cmp(&luminance(pixel(&off, b.0, b.1)))
+        })
+        .expect("skin pixels");
+    let mut lum: Vec<f32> = skin
+        .iter()
+        .map(|&(x, y)| luminance(pixel(&off, x, y)))
+        .collect();
+    lum.sort_by(f32::total_cmp);
+    let median = lum[lum.len() / 2];
+    let (peak_off, peak_on) = (
+        luminance(pixel(&off, px, py)),
+        luminance(pixel(&on, px, py)),
+    );
+    // How much the blur changes the skin elsewhere: the diffuse light does scatter.
+    let changed = skin
+        .iter()
+        .filter(|&&(x, y)| {
+            (luminance(pixel(&on, x, y)) - luminance(pixel(&off, x, y))).abs() > 0.01
+        })
+        .count();
+    eprintln!(
+        "highlight at {px},{py}: {peak_off} -> {peak_on} (skin median {median}); \
+         {changed} of {} skin pixels changed by > 0.01",
+        skin.len()
+    );
+    // A real highlight: well above the skin's median.
+    assert!(
+        peak_off > 2.0 * median,
+        "no highlight: peak {peak_off}, median {median}"
+    );
+    assert!(
+        changed * 5 > skin.len(),
+        "the diffuse light hardly scattered"
+    );
+    assert!(
+        (peak_on / peak_off - 1.0).abs() < 0.02,
+        "the highlight changed: {peak_off} -> {peak_on}"
+    );
 }
