@@ -154,6 +154,11 @@ pub(crate) fn assign_rows(
     let mut updates = Vec::new();
     for (id, m) in materials.iter() {
         let skin = &m.extension;
+        // A specular twin is a copy of its skin material, row included (it writes no
+        // marker anyway): looking it up would only report the same error twice.
+        if skin.specular {
+            continue;
+        }
         // Change detection on the table is set below only when a row was added: looking a
         // row up every frame must not re-extract the table every frame.
         let row = match media
@@ -268,5 +273,67 @@ pub(crate) fn sync_specular_twins(
         if let Some(mut t) = materials.get_mut(twin) {
             *t = copy;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_shared_per_medium_and_width() {
+        let mut media = SkinMedia::default();
+        assert_eq!(media.row("skin1", 1.0).unwrap(), 0);
+        assert_eq!(media.row("marble", 1.0).unwrap(), 1);
+        assert_eq!(media.row("skin1", 2.0).unwrap(), 2);
+        assert_eq!(media.row("skin1", 1.0).unwrap(), 0);
+        assert_eq!(media.rows.len(), 3);
+    }
+
+    #[test]
+    fn bad_media_and_widths_are_errors_not_rows() {
+        let mut media = SkinMedia::default();
+        let e = media.row("unobtainium", 1.0).unwrap_err();
+        assert!(
+            matches!(e, SubsurfaceError::Medium(ref m, _) if m == "unobtainium"),
+            "{e}"
+        );
+        for w in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(matches!(
+                media.row("skin", w),
+                Err(SubsurfaceError::Width(_))
+            ));
+        }
+        assert!(media.rows.is_empty());
+    }
+
+    #[test]
+    fn the_table_stops_at_its_size() {
+        let mut media = SkinMedia::default();
+        for i in 0..MAX_ROWS {
+            media.row("skin", 1.0 + i as f32).unwrap();
+        }
+        assert!(matches!(
+            media.row("skin", 0.5),
+            Err(SubsurfaceError::TooManyRows { .. })
+        ));
+        // An existing row is still found.
+        assert_eq!(media.row("skin", 1.0).unwrap(), 0);
+    }
+
+    #[test]
+    fn the_marker_names_the_row() {
+        let mut skin = Skin::new("skin", 1.0);
+        let images = RenderAssets::<GpuImage>::default();
+        let uniform = |s: &Skin| -> SkinUniform { s.as_bind_group_shader_type(&images) };
+        assert_eq!(uniform(&skin).marker, 1.0);
+        skin.row = Some(0);
+        assert_eq!(uniform(&skin).marker, -1.0);
+        skin.row = Some(5);
+        assert_eq!(uniform(&skin).marker, -6.0);
+        assert_eq!(uniform(&skin).specular, 0);
+        let twin = twin_of(&SkinMaterial::default());
+        assert_eq!(uniform(&twin.extension).specular, 1);
+        assert_eq!(twin.base.alpha_mode, AlphaMode::Add);
     }
 }

@@ -235,7 +235,10 @@ fn subsurface_pass(
 ) {
     let entity = view.entity();
     let (extracted, target, depth_buffer, sub) = view.into_inner();
-    let Some(media) = media else { return };
+    // No skin material has a row yet: no pixel is marked, nothing to do.
+    let Some(media) = media.filter(|m| !m.rows.is_empty()) else {
+        return;
+    };
     if state.failed {
         return;
     }

@@ -10,11 +10,11 @@ use common::*;
 use subsurface_bevy::{Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
 
 fn render(with_subsurface: bool) -> Vec<u8> {
-    render_skin(with_subsurface, 0.6, 20.0)
+    render_skin(with_subsurface, 0.6, 20.0, "skin1")
 }
 
-/// The scene of `common::spawn_scene` with a skin sphere of this roughness and width.
-fn render_skin(with_subsurface: bool, roughness: f32, width: f32) -> Vec<u8> {
+/// The scene of `common::spawn_scene` with a skin sphere of this roughness, width and medium.
+fn render_skin(with_subsurface: bool, roughness: f32, width: f32, medium: &str) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = if with_subsurface {
@@ -34,7 +34,7 @@ fn render_skin(with_subsurface: bool, roughness: f32, width: f32) -> Vec<u8> {
             },
             // The sphere has a radius of 1 m, 30 pixels here: a width of 20 makes a
             // profile millimetre 2 cm, a fraction of a pixel, the profile a few pixels.
-            extension: Skin::new("skin1", width),
+            extension: Skin::new(medium, width),
         });
     spawn_scene(&mut h.app, MeshMaterial3d(skin));
     render_until_stable(&mut h, 600)
@@ -110,8 +110,8 @@ fn specular_highlight_stays_sharp() {
         return;
     }
     // Glossy skin and a wide profile, so that the blur is several pixels wide.
-    let off = render_skin(false, 0.25, 100.0);
-    let on = render_skin(true, 0.25, 100.0);
+    let off = render_skin(false, 0.25, 100.0, "skin1");
+    let on = render_skin(true, 0.25, 100.0, "skin1");
     dump(&off, "specular_off");
     dump(&on, "specular_on");
 
@@ -160,4 +160,27 @@ fn specular_highlight_stays_sharp() {
         (peak_on / peak_off - 1.0).abs() < 0.02,
         "the highlight changed: {peak_off} -> {peak_on}"
     );
+}
+
+/// A medium that does not exist is logged, not a panic: the material is drawn as plain PBR
+/// (its diffuse and its specular twin), no pixel is marked, and nothing is blurred.
+#[test]
+fn unknown_medium_draws_plain_pbr() {
+    if !gpu_available() {
+        return;
+    }
+    let off = render_skin(false, 0.6, 1.0, "unobtainium");
+    let on = render_skin(true, 0.6, 1.0, "unobtainium");
+    let (x, y) = (WIDTH / 2, HEIGHT / 3); // on the sphere's lit upper half
+    let p = pixel(&on, x, y);
+    assert!(
+        luminance(p) > 0.2 && !is_magenta(p),
+        "sphere not drawn: {p:?}"
+    );
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            assert!(pixel(&off, x, y)[3] >= 0.0, "skin marker at {x},{y}");
+        }
+    }
+    assert!(off == on, "the plugin changed an image without skin");
 }
