@@ -279,6 +279,13 @@ fn subsurface_pass(
     if state.views.get(&slot).is_none_or(|v| v.key != key) {
         match build_view(device_ref, mark, cache, key, main, depth_tex, sub, &media) {
             Ok(v) => {
+                log::debug!(
+                    "subsurface: camera {entity} bound to main texture {:?}, {}x{}, {} rows",
+                    key.0,
+                    size.0,
+                    size.1,
+                    key.4
+                );
                 state.views.insert(slot, v);
             }
             Err(e) => {

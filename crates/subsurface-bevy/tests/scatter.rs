@@ -5,6 +5,7 @@
 
 mod common;
 
+use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use common::*;
 use subsurface_bevy::{Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
@@ -15,12 +16,22 @@ fn render(with_subsurface: bool) -> Vec<u8> {
 
 /// The scene of `common::spawn_scene` with a skin sphere of this roughness, width and medium.
 fn render_skin(with_subsurface: bool, roughness: f32, width: f32, medium: &str) -> Vec<u8> {
+    render_full(with_subsurface, roughness, width, medium, Tonemapping::None)
+}
+
+fn render_full(
+    with_subsurface: bool,
+    roughness: f32,
+    width: f32,
+    medium: &str,
+    tonemapping: Tonemapping,
+) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = if with_subsurface {
-        setup(app, Subsurface::default())
+        setup_with(app, Subsurface::default(), tonemapping)
     } else {
-        setup(app, ())
+        setup_with(app, (), tonemapping)
     };
     let skin = h
         .app
@@ -183,4 +194,35 @@ fn unknown_medium_draws_plain_pbr() {
         }
     }
     assert!(off == on, "the plugin changed an image without skin");
+}
+
+/// With a tone mapper, Bevy's tone-mapping pass writes the camera's other main texture and
+/// swaps them, so the opaque pass draws into the two in turn, frame after frame: the step
+/// must follow (it keeps one bound pass per main texture). Tone mapping is per pixel, so
+/// the non-skin pixels must still come back bit for bit, and the skin must still change.
+#[test]
+fn works_when_tone_mapping_swaps_main_textures() {
+    if !gpu_available() {
+        return;
+    }
+    let off = render_full(false, 0.6, 20.0, "skin1", Tonemapping::Reinhard);
+    let on = render_full(true, 0.6, 20.0, "skin1", Tonemapping::Reinhard);
+    let (mut skin, mut changed) = (0, 0);
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            let (a, b) = (pixel(&off, x, y), pixel(&on, x, y));
+            // Reinhard keeps alpha: the marker survives without the step.
+            if a[3] < 0.0 {
+                skin += 1;
+                assert_eq!(b[3], 1.0, "marker left at {x},{y}");
+                if (0..3).any(|c| (a[c] - b[c]).abs() > 1e-3) {
+                    changed += 1;
+                }
+            } else {
+                assert_eq!(pixel_bits(&off, x, y), pixel_bits(&on, x, y), "{x},{y}");
+            }
+        }
+    }
+    eprintln!("tone mapped: {changed} of {skin} skin pixels changed");
+    assert!(skin > 2000 && changed * 10 > skin, "{changed} of {skin}");
 }

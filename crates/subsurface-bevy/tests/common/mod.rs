@@ -58,7 +58,13 @@ pub fn app() -> App {
 
 /// Finishes plugin setup the way Bevy's own runner does (the renderer is created
 /// asynchronously), spawns the camera with its image target and readback.
-pub fn setup(mut app: App, camera_extra: impl Bundle) -> Headless {
+pub fn setup(app: App, camera_extra: impl Bundle) -> Headless {
+    setup_with(app, camera_extra, Tonemapping::None)
+}
+
+/// As [`setup`], with this tone mapper (one that needs no LUT: this crate leaves Bevy's
+/// `tonemapping_luts` feature out).
+pub fn setup_with(mut app: App, camera_extra: impl Bundle, tonemapping: Tonemapping) -> Headless {
     let start = Instant::now();
     while app.plugins_state() == PluginsState::Adding {
         bevy::tasks::tick_global_task_pools_on_main_thread();
@@ -88,9 +94,9 @@ pub fn setup(mut app: App, camera_extra: impl Bundle) -> Headless {
             },
             RenderTarget::Image(target.clone().into()),
             Hdr,
-            // No tone mapping, dithering or MSAA: the target holds the lit radiance itself,
-            // the same on every run.
-            Tonemapping::None,
+            // No tone mapping (by default), dithering or MSAA: the target holds the lit
+            // radiance itself, the same on every run.
+            tonemapping,
             DebandDither::Disabled,
             Msaa::Off,
             Transform::from_xyz(0.0, 1.2, 5.0).looking_at(Vec3::new(0.0, -0.2, 0.0), Vec3::Y),
