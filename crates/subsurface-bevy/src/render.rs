@@ -112,6 +112,8 @@ pub struct SubsurfaceViews {
     mark: Option<(wgpu::RenderPipeline, wgpu::Buffer)>,
     views: HashMap<(Entity, bevy::render::render_resource::TextureId), ViewSss>,
     cache: Option<MaterialCache>,
+    /// Cameras already told why they are skipped (once each).
+    warned: bevy::platform::collections::HashSet<Entity>,
     frame: u64,
     failed: bool,
 }
@@ -244,20 +246,28 @@ fn subsurface_pass(
     }
     let main: &wgpu::Texture = target.main_texture();
     let depth_tex: &wgpu::Texture = depth_buffer.texture();
-    // The step reads depth as a texture and writes main-texture texels one for one; a
-    // multisampled target (MSAA) or a depth buffer without texture usage cannot be read.
-    if main.sample_count() != 1
-        || depth_tex.sample_count() != 1
-        || !depth_tex
-            .usage()
-            .contains(wgpu::TextureUsages::TEXTURE_BINDING)
-        || main.format() != sss::FORMAT
-    {
-        return;
-    }
     let clip_from_view = extracted.clip_from_view;
-    // Perspective only: the blur's footprint uses the focal length in pixels.
-    if clip_from_view.w_axis.w != 0.0 {
+    // The step reads depth as a texture and writes main-texture texels one for one; a
+    // multisampled depth buffer (MSAA) or one without texture usage cannot be read, and the
+    // blur's footprint needs a perspective camera's focal length.
+    let unsupported = if main.format() != sss::FORMAT {
+        Some("the camera is not HDR (add `Hdr`)")
+    } else if depth_tex.sample_count() != 1 {
+        Some("MSAA is on (use `Msaa::Off`)")
+    } else if !depth_tex
+        .usage()
+        .contains(wgpu::TextureUsages::TEXTURE_BINDING)
+    {
+        Some("the depth buffer cannot be read (Camera3d::depth_texture_usages)")
+    } else if clip_from_view.w_axis.w != 0.0 {
+        Some("the projection is not perspective")
+    } else {
+        None
+    };
+    if let Some(reason) = unsupported {
+        if state.warned.insert(entity) {
+            log::warn!("subsurface: camera {entity} is skipped: {reason}");
+        }
         return;
     }
     let size = (main.width(), main.height());
