@@ -97,10 +97,12 @@ fn kernels(
 /// What one camera keeps between frames.
 struct ViewSss {
     key: ViewSssKey,
-    depth: wgpu::Texture,
-    sss: wgpu::Texture,
     pass: SssPass,
+    mark_uniform: wgpu::Buffer,
     mark_bind_group: wgpu::BindGroup,
+    /// The mark pass's targets, linear depth and the SSS texture (the views keep their
+    /// textures alive).
+    targets: [wgpu::TextureView; 2],
     last_frame: u64,
 }
 
@@ -109,7 +111,7 @@ struct ViewSss {
 /// may hold one state per main texture.
 #[derive(Resource, Default)]
 pub struct SubsurfaceViews {
-    mark: Option<(wgpu::RenderPipeline, wgpu::Buffer)>,
+    mark: Option<wgpu::RenderPipeline>,
     views: HashMap<(Entity, bevy::render::render_resource::TextureId), ViewSss>,
     cache: Option<MaterialCache>,
     /// Cameras already told why they are skipped (once each).
@@ -118,10 +120,10 @@ pub struct SubsurfaceViews {
     failed: bool,
 }
 
-fn mark_pipeline(device: &wgpu::Device) -> (wgpu::RenderPipeline, wgpu::Buffer) {
+fn mark_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
     let source = format!("{}{MARK_WGSL}", fullscreen::VERTEX_WGSL);
     let module = util::wgsl_module(device, "subsurface mark", &source);
-    let pipeline = fullscreen::pipeline(
+    fullscreen::pipeline(
         device,
         &module,
         None, // layout derived from the shader: uniform, colour, depth
@@ -130,20 +132,13 @@ fn mark_pipeline(device: &wgpu::Device) -> (wgpu::RenderPipeline, wgpu::Buffer) 
             Some(wgpu::TextureFormat::R32Float.into()),
             Some(sss::FORMAT.into()),
         ],
-    );
-    let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("subsurface mark"),
-        size: std::mem::size_of::<MarkUniform>() as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    (pipeline, uniform)
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
 fn build_view(
     device: &wgpu::Device,
-    mark: &(wgpu::RenderPipeline, wgpu::Buffer),
+    mark: &wgpu::RenderPipeline,
     cache: &mut MaterialCache,
     key: ViewSssKey,
     main: &wgpu::Texture,
@@ -181,13 +176,21 @@ fn build_view(
         aspect: wgpu::TextureAspect::DepthOnly,
         ..Default::default()
     });
+    // Each camera its own uniform: queue writes land before the frame's commands run, so
+    // cameras sharing one buffer would all read the last camera's.
+    let mark_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("subsurface mark"),
+        size: std::mem::size_of::<MarkUniform>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     let mark_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("subsurface mark"),
-        layout: &mark.0.get_bind_group_layout(0),
+        layout: &mark.get_bind_group_layout(0),
         entries: &[
             wgpu::BindGroupEntry {
                 binding: 0,
-                resource: mark.1.as_entire_binding(),
+                resource: mark_uniform.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
                 binding: 1,
@@ -201,10 +204,10 @@ fn build_view(
     });
     Ok(ViewSss {
         key,
-        depth,
-        sss: sss_tex,
         pass,
+        mark_uniform,
         mark_bind_group,
+        targets: [depth_view, sss_view],
         last_frame: 0,
     })
 }
@@ -327,28 +330,24 @@ fn subsurface_pass(
         scale,
     };
     let queue: &wgpu::Queue = &queue;
-    queue.write_buffer(&mark.1, 0, bytemuck::bytes_of(&uniform));
+    queue.write_buffer(&v.mark_uniform, 0, bytemuck::bytes_of(&uniform));
     // Focal length in pixels: clip_from_view's y scale is 1 / tan(fov_y / 2).
     v.pass
         .prepare(queue, 0.5 * size.1 as f32 * clip_from_view.y_axis.y);
 
     let encoder = ctx.command_encoder();
     {
-        let (depth_view, sss_view) = (
-            v.depth.create_view(&Default::default()),
-            v.sss.create_view(&Default::default()),
-        );
         let attach =
             |view| util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("subsurface mark"),
-            color_attachments: &[attach(&depth_view), attach(&sss_view)],
+            color_attachments: &[attach(&v.targets[0]), attach(&v.targets[1])],
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&mark.0);
+        pass.set_pipeline(mark);
         pass.set_bind_group(0, &v.mark_bind_group, &[]);
         pass.draw(0..3, 0..1);
     }

@@ -257,3 +257,38 @@ pub fn dump(data: &[u8], name: &str) {
     img.save(&path).unwrap();
     eprintln!("wrote {}", path.display());
 }
+
+/// Adds a second camera (another `Image` target and read-back) to a [`Headless`] app, at
+/// `transform`, with `extra` components.
+pub fn add_camera(h: &mut Headless, transform: Transform, extra: impl Bundle) -> Slot {
+    let mut image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba16Float, None);
+    image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+    let world = h.app.world_mut();
+    let target = world.resource_mut::<Assets<Image>>().add(image);
+    world.spawn((
+        Camera3d::default(),
+        Camera {
+            clear_color: ClearColorConfig::Custom(Color::LinearRgba(LinearRgba::new(
+                CLEAR[0], CLEAR[1], CLEAR[2], CLEAR[3],
+            ))),
+            // After the first camera: each camera has its own order.
+            order: 1,
+            ..default()
+        },
+        RenderTarget::Image(target.clone().into()),
+        Hdr,
+        Tonemapping::None,
+        DebandDither::Disabled,
+        Msaa::Off,
+        transform,
+        extra,
+    ));
+    let slot: Slot = Arc::default();
+    let sink = slot.clone();
+    world
+        .spawn(Readback::texture(target))
+        .observe(move |event: On<ReadbackComplete>| {
+            *sink.lock().unwrap() = Some(event.data.clone());
+        });
+    slot
+}
