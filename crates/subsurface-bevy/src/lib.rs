@@ -42,7 +42,7 @@
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
-use bevy::camera::Camera3d;
+use bevy::camera::{Camera3d, Hdr};
 use bevy::ecs::prelude::*;
 use bevy::pbr::MaterialPlugin;
 use bevy::render::RenderApp;
@@ -73,8 +73,10 @@ pub enum SubsurfaceError {
     Render(#[from] subsurface_render::RenderError),
 }
 
-/// Put this on an HDR `Camera3d` to scatter light under the skin it sees.
+/// Put this on a `Camera3d` to scatter light under the skin it sees. The camera must be HDR
+/// (the step works on its `Rgba16Float` main texture), so `Subsurface` requires `Hdr`.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[require(Hdr)]
 pub struct Subsurface {
     /// The quality preset of subsurface-render (`low`, `medium`, `high`): the number of
     /// kernel taps and whether they are jittered.
@@ -125,6 +127,7 @@ impl Plugin for SubsurfacePlugin {
                 (
                     material::assign_rows,
                     material::spawn_specular_twins,
+                    material::remove_stale_twins,
                     material::sync_specular_twins,
                     prepare_cameras,
                 )

@@ -253,6 +253,29 @@ pub(crate) fn spawn_specular_twins(
     }
 }
 
+/// Removes the specular child of an entity that is no longer skin (its skin material was
+/// removed or replaced by another material type): it would keep drawing the old skin's
+/// highlights.
+pub(crate) fn remove_stale_twins(
+    mut commands: Commands,
+    mut removed: RemovedComponents<MeshMaterial3d<SkinMaterial>>,
+    skins: Query<(), (With<MeshMaterial3d<SkinMaterial>>, Without<SkinSpecular>)>,
+    children: Query<&Children>,
+    specular: Query<(), With<SkinSpecular>>,
+) {
+    for entity in removed.read() {
+        // Removed and added again in the same frame: spawn_specular_twins handles it.
+        if skins.contains(entity) {
+            continue;
+        }
+        for child in children.get(entity).into_iter().flatten() {
+            if specular.contains(*child) {
+                commands.entity(*child).despawn();
+            }
+        }
+    }
+}
+
 /// Keeps each twin a copy of its skin material (base parameters, medium, width).
 pub(crate) fn sync_specular_twins(
     mut events: MessageReader<AssetEvent<SkinMaterial>>,
@@ -279,6 +302,69 @@ pub(crate) fn sync_specular_twins(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bevy::MinimalPlugins;
+    use bevy::app::{App, Update};
+    use bevy::asset::{AssetApp, AssetPlugin};
+
+    /// The twin systems alone (no renderer): an app with skin material assets.
+    fn twin_app() -> App {
+        let mut app = App::new();
+        app.add_plugins((MinimalPlugins, AssetPlugin::default()))
+            .init_asset::<SkinMaterial>()
+            .init_resource::<SpecularTwins>()
+            .add_systems(Update, (spawn_specular_twins, remove_stale_twins).chain());
+        app
+    }
+
+    fn twins_of(app: &mut App, entity: Entity) -> Vec<Entity> {
+        let world = app.world_mut();
+        let children: Vec<Entity> = world
+            .get::<Children>(entity)
+            .map(|c| c.iter().collect())
+            .unwrap_or_default();
+        children
+            .into_iter()
+            .filter(|c| world.get::<SkinSpecular>(*c).is_some())
+            .collect()
+    }
+
+    #[test]
+    fn a_skin_mesh_gets_one_additive_twin_and_loses_it_when_no_longer_skin() {
+        let mut app = twin_app();
+        let skin = app
+            .world_mut()
+            .resource_mut::<Assets<SkinMaterial>>()
+            .add(SkinMaterial::default());
+        let entity = app
+            .world_mut()
+            .spawn((Mesh3d::default(), MeshMaterial3d(skin.clone())))
+            .id();
+        app.update();
+        let twins = twins_of(&mut app, entity);
+        assert_eq!(twins.len(), 1);
+        let twin_material = app
+            .world()
+            .get::<MeshMaterial3d<SkinMaterial>>(twins[0])
+            .unwrap()
+            .0
+            .clone();
+        assert_ne!(twin_material.id(), skin.id());
+        let materials = app.world().resource::<Assets<SkinMaterial>>();
+        let twin = materials.get(&twin_material).unwrap();
+        assert!(twin.extension.specular);
+        assert_eq!(twin.base.alpha_mode, AlphaMode::Add);
+        // Frames without a change spawn nothing more.
+        app.update();
+        app.update();
+        assert_eq!(twins_of(&mut app, entity), twins);
+
+        app.world_mut()
+            .entity_mut(entity)
+            .remove::<MeshMaterial3d<SkinMaterial>>();
+        app.update();
+        assert!(twins_of(&mut app, entity).is_empty());
+        assert!(app.world().get_entity(twins[0]).is_err());
+    }
 
     #[test]
     fn rows_are_shared_per_medium_and_width() {
