@@ -10,6 +10,7 @@
 use bevy::app::App;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
 use bevy::platform::collections::HashMap;
 use bevy::render::RenderApp;
@@ -116,7 +117,6 @@ pub struct SubsurfaceViews {
     cache: Option<MaterialCache>,
     /// Cameras already told why they are skipped (once each).
     warned: bevy::platform::collections::HashSet<Entity>,
-    frame: u64,
     failed: bool,
 }
 
@@ -236,6 +236,7 @@ fn subsurface_pass(
     mut state: ResMut<SubsurfaceViews>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
+    frame_count: Res<FrameCount>,
     mut ctx: RenderContext,
 ) {
     let entity = view.entity();
@@ -264,6 +265,9 @@ fn subsurface_pass(
         Some("the depth buffer cannot be read (Camera3d::depth_texture_usages)")
     } else if clip_from_view.w_axis.w != 0.0 {
         Some("the projection is not perspective")
+    } else if (extracted.viewport.z, extracted.viewport.w) != (main.width(), main.height()) {
+        // The mark pass and the focal length take the whole texture as the view.
+        Some("the camera draws into a viewport, not its whole target")
     } else {
         None
     };
@@ -276,8 +280,7 @@ fn subsurface_pass(
     let size = (main.width(), main.height());
     let device_ref: &wgpu::Device = device.wgpu_device();
     let state = &mut *state;
-    state.frame += 1;
-    let frame = state.frame;
+    let frame = u64::from(frame_count.0);
     let mark = state.mark.get_or_insert_with(|| mark_pipeline(device_ref));
     let cache = state.cache.get_or_insert_with(MaterialCache::default);
 
@@ -309,10 +312,10 @@ fn subsurface_pass(
             }
         }
     }
-    // Forget cameras and textures not drawn for a while (their textures are large).
+    // Forget cameras and main textures not drawn for 8 frames (their targets are large).
     state
         .views
-        .retain(|_, v| frame - v.last_frame < 8 || v.last_frame == 0);
+        .retain(|k, v| *k == slot || frame.saturating_sub(v.last_frame) < 8);
     let Some(v) = state.views.get_mut(&slot) else {
         return;
     };
