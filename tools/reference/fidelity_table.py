@@ -30,7 +30,9 @@ COMBOS = [("none", "off")] + [(s, "diffusion") for s in ("none", "gaussian6", "s
 ]
 # Side-by-side images kept in the repository (the others go to a temporary directory).
 KEEP_IMAGES = {("none", "off"), ("separable", "paper"), ("separable", "diffusion")}
-# The default method (`subsurface render` with no flags).
+# The default method (`subsurface render` with no flags). Every run is at `--quality high`
+# (every term of the renderer), as the regression guard in tests/fidelity.rs renders; the
+# cheaper presets are checked against their own targets there.
 DEFAULT = ("separable", "diffusion")
 
 
@@ -56,7 +58,7 @@ def main():
                 out = os.path.join(ROOT, img) if (sss, tr) in KEEP_IMAGES else os.path.join(tmp, "x.png")
                 plot = f"references/compare/{name}--{sss}--{tr}.{kind}.png" if kind else None
                 r = subprocess.run(
-                    [exe, "compare", os.path.join(ROOT, "references", name + ".exr"), scene,
+                    [exe, "compare", "--quality", "high", os.path.join(ROOT, "references", name + ".exr"), scene,
                      "--sss", sss, "--transmittance", tr, "--json", "--out", out]
                     + (["--plot", os.path.join(ROOT, plot)] if plot else []),
                     capture_output=True, text=True, env=env)
@@ -103,7 +105,7 @@ def main():
 
             def without_bounce(reference):
                 r = subprocess.run(
-                    [exe, "compare", reference, os.path.join(ROOT, "scenes/canonical", name + ".toml"),
+                    [exe, "compare", "--quality", "high", reference, os.path.join(ROOT, "scenes/canonical", name + ".toml"),
                      "--sss", DEFAULT[0], "--transmittance", DEFAULT[1], "--bounce-ring", "0",
                      "--json", "--out", os.path.join(tmp, "x.png")],
                     capture_output=True, text=True, env=env)

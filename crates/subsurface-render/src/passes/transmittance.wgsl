@@ -27,6 +27,13 @@ override LATERAL_SOURCE: u32 = FOLLOW_UNIFORM;
 // the call.
 var<private> given_entry: Entry;
 var<private> given_lateral: vec3<f32>;
+// LATERAL_SOURCE 3: the taps' kernel masses (`lateral_mass`) summed over the texel's lanes.
+var<private> given_mass: vec2<f32>;
+
+// The lateral taps' last sum's kernel masses: x the slab kernel's weight of the taps that find
+// the part (or whose mirror across the chord does), y of all taps. Their ratio is how much of
+// the chord's slab exists around it (`transmittance`).
+var<private> lateral_mass: vec2<f32>;
 
 fn transmittance_method() -> u32 {
     if (TRANSMITTANCE_METHOD == FOLLOW_UNIFORM) {
@@ -338,6 +345,8 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
 // of the chord's rise: invocations that share a texel each take a stride of the taps, so that
 // the texel waits for a few of their shadow-map loads in turn rather than for all of them.
 fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, s_mm: f32, first: u32, stride: u32) -> vec3<f32> {
+    var mass_all = 0.0;
+    var mass_hit = 0.0;
     let sigma = object.lateral_decay;
     let taps = min(lights.lateral_taps, 32u);
     let units_per_mm = object.world_per_mm * object.translucency;
@@ -372,13 +381,32 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
         // The stratified taps' density is sigma exp(-sigma u) = sigma (1 - xi) per mm.
         let weight = r_tap * per_tap / (1.0 - xi);
         dir = vec2<f32>(dir.x * turn.x - dir.y * turn.y, dir.x * turn.y + dir.y * turn.x);
+        // The tap's weight in the chord's own slab (its entry at the chord's depth): the taps'
+        // sum of it over a slab is the slab's T_ms, the chord term; the green channel, the
+        // middle of the kernels, stands for all three.
+        let slab_r = min(r_tap, DIFFUSION_RANGE_MM);
+        let slab_w = lut_row(slab_r, DIFFUSION_RANGE_MM, SLOPE_ROW).g / r_tap * weight;
+        mass_all += slab_w;
         let sc = shadow_coord(light, q);
-        if (!sc.inside) {
-            continue;
+        var texel = vec2<f32>(3.4e38, -1.0);
+        if (sc.inside) {
+            texel = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
         }
-        let texel = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
         let d = texel.x;
-        if (d > 1e30) {
+        // The mirrored tap, across the chord: at an outline one of the two lies on the part,
+        // beside a part narrower than the kernel neither does.
+        var covered = d <= 1e30;
+        if (!covered) {
+            let qm = 2.0 * shrunk - q;
+            let scm = shadow_coord(light, qm);
+            if (scm.inside) {
+                covered = textureLoad(shadow_atlas, shadow_texel(light, scm), scm.layer, 0).r <= 1e30;
+            }
+        }
+        if (covered) {
+            mass_hit += slab_w;
+        }
+        if (!sc.inside || d > 1e30) {
             continue;
         }
         let to_light = light_direction(light.kind, light.position, light.direction, q);
@@ -405,6 +433,7 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
         let slope = lut_row(min(r, DIFFUSION_RANGE_MM), DIFFUSION_RANGE_MM, SLOPE_ROW) * tail;
         sum += slope / r * weight * below * entry_in;
     }
+    lateral_mass = vec2<f32>(mass_hit, mass_all);
     return sum;
 }
 
@@ -600,10 +629,19 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                     var lateral: vec3<f32>;
                     if (LATERAL_SOURCE == LATERAL_GIVEN) {
                         lateral = given_lateral * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
+                        lateral_mass = given_mass;
                     } else {
                         lateral = lateral_transmittance(light, p, n_vertex, l, s_mm);
                     }
-                    diffuse = max(diffuse, shape * lateral);
+                    // The chord's slab is infinite; a part narrower than the slab's kernel
+                    // (a cylinder, a sphere, lit from behind) loses through its sides what
+                    // the slab would send back to the exit point. Its share of the kernel that
+                    // the part holds scales the chord term: beside the part a tap and its
+                    // mirror across the chord both find nothing, at an outline one of them
+                    // finds the part, so an outline keeps its chord (suite: a marble
+                    // cylinder's middle read +90 % without it; docs/lab/suite.md).
+                    let coverage = select(1.0, lateral_mass.x / lateral_mass.y, lateral_mass.y > 0.0);
+                    diffuse = max(diffuse * coverage, shape * lateral);
                 }
                 out.diffuse = diffuse * unlit;
                 var ballistic = vec3<f32>(0.0);

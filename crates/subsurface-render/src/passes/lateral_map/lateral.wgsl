@@ -126,6 +126,7 @@ override BLOCK_WIDTH: u32 = 4u;
 override BLOCK_HEIGHT: u32 = 2u;
 var<workgroup> lane_entry: array<vec4<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_taps: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+var<workgroup> lane_mass: array<vec2<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_diffuse: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_ballistic: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 
@@ -156,6 +157,7 @@ fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoca
     let per_light = TEXEL_LANES / max(count, 1u);
     let light_index = lane / per_light;
     var taps = vec3<f32>(0.0);
+    lateral_mass = vec2<f32>(0.0);
     if (translucent && light_index < count && lights.lateral_taps > 0u && object.lateral_decay > 0.0) {
         let s_mm = lane_entry[first_lane + light_index].w;
         if (s_mm >= 0.0) {
@@ -165,17 +167,21 @@ fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoca
         }
     }
     lane_taps[index] = taps;
+    lane_mass[index] = lateral_mass;
     workgroupBarrier();
     // Lane i: the rest of light i's transmittance.
     var t = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
     if (translucent && lane < count) {
         var sum = vec3<f32>(0.0);
+        var mass = vec2<f32>(0.0);
         for (var k = 0u; k < per_light; k++) {
             sum += lane_taps[first_lane + lane * per_light + k];
+            mass += lane_mass[first_lane + lane * per_light + k];
         }
         let e = lane_entry[index];
         given_entry = Entry(e.w, e.xyz);
         given_lateral = sum;
+        given_mass = mass;
         t = light_transmitted(lane, s.world, s.normal);
     }
     lane_diffuse[index] = t.diffuse;
