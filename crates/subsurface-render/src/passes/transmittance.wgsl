@@ -29,10 +29,9 @@ var<private> given_entry: Entry;
 var<private> given_lateral: vec3<f32>;
 // LATERAL_SOURCE 3: the taps' kernel masses (`lateral_mass`) summed over the texel's lanes.
 var<private> given_mass: vec2<f32>;
-
 // The lateral taps' last sum's kernel masses: x the slab kernel's weight of the taps that find
-// the part (or whose mirror across the chord does), y of all taps. Their ratio is how much of
-// the chord's slab exists around it (`transmittance`).
+// the part (or whose mirror across the chord does), y of all taps; x / y is how much of the
+// chord's slab exists around it (`transmittance`).
 var<private> lateral_mass: vec2<f32>;
 
 fn transmittance_method() -> u32 {
