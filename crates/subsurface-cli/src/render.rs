@@ -118,5 +118,9 @@ pub fn run(args: &RenderArgs, verbose: u8) -> Result<()> {
         start.elapsed().as_secs_f64() * 1e3
     );
     print_summary(stdout_taken, &summary);
+    // After the image: a run that fails says one thing, its error.
+    for line in subsurface_render::lights::coarse_shadow_maps(&scene) {
+        log::warn!("{line}");
+    }
     Ok(())
 }

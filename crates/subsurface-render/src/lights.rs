@@ -94,6 +94,8 @@ pub const COARSE_SHADOW_TEXEL_MM: f32 = 2.0;
 /// map spreads few texels over the scene, and transmittance then reads the thickness of
 /// whole parts from one or two texels (an 85° cone on a 512 map gave a 3 mm slab twice its
 /// transmitted light, an 88° cone a third of it). Empty when every map is fine enough.
+/// `subsurface render` prints them after a successful image, so a failing run still says one
+/// thing, its error.
 pub fn coarse_shadow_maps(scene: &Scene) -> Vec<String> {
     let skin_mm = scene
         .objects

@@ -237,9 +237,6 @@ impl Renderer {
         let profiles = profile_table(scene, &options)?;
         let objects = gpu_scene::upload_objects(ctx, scene, &object_layout, &profiles.object_rows)?;
         let (plan, lights) = plan_frame(ctx, scene, &options)?;
-        for line in crate::lights::coarse_shadow_maps(scene) {
-            log::warn!("{line}");
-        }
         let kinds = light_kinds(&lights, scene.desc.lights.len());
         let shadow = ShadowPass::new(
             ctx,
