@@ -21,6 +21,15 @@ pub fn lut_texture(
     ctx: &GpuContext,
     optics: &MaterialOptics,
 ) -> Result<(wgpu::TextureView, f32), RenderError> {
+    lut_texture_on(&ctx.device, &ctx.queue, optics)
+}
+
+/// [`lut_texture`] on a bare device and queue (an engine's, e.g. Bevy's render device).
+pub fn lut_texture_on(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    optics: &MaterialOptics,
+) -> Result<(wgpu::TextureView, f32), RenderError> {
     let res = TransmittanceLut::DEFAULT_RESOLUTION;
     let lut = TransmittanceLut::new(&optics.profile, res, TransmittanceLut::DEFAULT_S_MAX_MM)?;
     let mut rows = vec![lut.to_rgba()];
@@ -38,7 +47,7 @@ pub fn lut_texture(
         .flatten()
         .map(|v| half::f16::from_f32(*v))
         .collect();
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("transmittance lut"),
         size: wgpu::Extent3d {
             width: res,
@@ -52,7 +61,7 @@ pub fn lut_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    ctx.queue.write_texture(
+    queue.write_texture(
         texture.as_image_copy(),
         bytemuck::cast_slice(&data),
         wgpu::TexelCopyBufferLayout {

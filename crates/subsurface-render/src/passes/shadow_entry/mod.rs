@@ -53,6 +53,7 @@ struct EntryViewUniform {
 }
 
 struct Layer {
+    uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     target: wgpu::TextureView,
     size: u32,
@@ -108,15 +109,8 @@ impl ShadowEntryPass {
             .map(|(i, l)| {
                 let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("shadow entry view"),
-                    contents: bytemuck::bytes_of(&EntryViewUniform {
-                        inverse_view_proj: l.view_proj.inverse().to_cols_array_2d(),
-                        light_position: l.origin.extend(l.kind).to_array(),
-                        light_direction: l.direction.extend(0.0).to_array(),
-                        layer: i as i32,
-                        size: l.size as i32,
-                        _pad: [0; 2],
-                    }),
-                    usage: wgpu::BufferUsages::UNIFORM,
+                    contents: bytemuck::bytes_of(&entry_uniform(i, l)),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
                 let bind_group = util::bind_group(
                     device,
@@ -128,6 +122,7 @@ impl ShadowEntryPass {
                     ],
                 );
                 Layer {
+                    uniform,
                     bind_group,
                     target: util::layer_view(&atlas, i as u32),
                     size: l.size,
@@ -139,6 +134,15 @@ impl ShadowEntryPass {
             layers,
             atlas_view: util::array_view(&atlas),
             atlas,
+        }
+    }
+
+    /// Moves the layers' cameras: `layers[i]` for layer `i`, as many as at creation and no
+    /// larger than the atlas (an engine's shadow cascades follow its camera every frame).
+    pub fn set_layers(&mut self, queue: &wgpu::Queue, layers: &[EntryLayer]) {
+        for (i, (layer, l)) in self.layers.iter_mut().zip(layers).enumerate() {
+            layer.size = l.size;
+            queue.write_buffer(&layer.uniform, 0, bytemuck::bytes_of(&entry_uniform(i, l)));
         }
     }
 
@@ -186,5 +190,17 @@ impl ShadowEntryPass {
             }
             timer.end(profiler, encoder);
         }
+    }
+}
+
+/// Layer `index`'s uniform: the inverse of its matrix unprojects the caller's depths.
+fn entry_uniform(index: usize, l: &EntryLayer) -> EntryViewUniform {
+    EntryViewUniform {
+        inverse_view_proj: l.view_proj.inverse().to_cols_array_2d(),
+        light_position: l.origin.extend(l.kind).to_array(),
+        light_direction: l.direction.extend(0.0).to_array(),
+        layer: index as i32,
+        size: l.size as i32,
+        _pad: [0; 2],
     }
 }

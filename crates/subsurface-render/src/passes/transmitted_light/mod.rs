@@ -77,8 +77,17 @@ impl SkinMedium {
         optics: &MaterialOptics,
         uniform: ObjectUniform,
     ) -> Result<Self, RenderError> {
-        let device = &ctx.device;
-        let (lut, range) = transmittance::lut_texture(ctx, optics)?;
+        Self::on_device(&ctx.device, &ctx.queue, optics, uniform)
+    }
+
+    /// [`Self::new`] on a bare device and queue (an engine's, e.g. Bevy's render device).
+    pub fn on_device(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        optics: &MaterialOptics,
+        uniform: ObjectUniform,
+    ) -> Result<Self, RenderError> {
+        let (lut, range) = transmittance::lut_texture_on(device, queue, optics)?;
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("skin medium"),
             contents: bytemuck::bytes_of(&ObjectUniform {
