@@ -85,6 +85,16 @@ pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetu
     })
 }
 
+/// A point light's cube faces see 92 degrees, slightly wider than 90, so that the PCF taps at
+/// a face's edge stay inside it.
+const POINT_FACE_FOV_DEG: f32 = 92.0;
+
+/// The field of view (radians) of a spot light's shadow map: its cone and 5 % more, at most
+/// 179 degrees.
+fn spot_fov(outer_angle_deg: f32) -> f32 {
+    (2.0 * outer_angle_deg.to_radians() * 1.05).min(179f32.to_radians())
+}
+
 /// Shadow-map texels coarser than this on the skin (profile millimetres) resolve no part
 /// thinner: fingers are about 15 mm through, ears 2 to 5 mm.
 pub const COARSE_SHADOW_TEXEL_MM: f32 = 2.0;
@@ -119,11 +129,8 @@ pub fn coarse_shadow_maps(scene: &Scene) -> Vec<String> {
         let distance = (Vec3::from(l.position) - centre).length();
         // The map's width where the scene lies, as light_uniform frames it.
         let width = match l.kind {
-            LightKind::Spot => {
-                let fov = (2.0 * l.outer_angle_deg.to_radians() * 1.05).min(179f32.to_radians());
-                2.0 * distance * (0.5 * fov).tan()
-            }
-            LightKind::Point => 2.0 * distance * 46f32.to_radians().tan(),
+            LightKind::Spot => 2.0 * distance * (0.5 * spot_fov(l.outer_angle_deg)).tan(),
+            LightKind::Point => 2.0 * distance * (0.5 * POINT_FACE_FOV_DEG.to_radians()).tan(),
             LightKind::Directional => 2.0 * radius,
         };
         let texel_mm = width / l.shadow_map_size as f32 / skin_mm;
@@ -170,7 +177,7 @@ fn light_uniform(
     if l.shadow_map_size > 0 {
         match l.kind {
             LightKind::Spot => {
-                let fov = (2.0 * l.outer_angle_deg.to_radians() * 1.05).min(179f32.to_radians());
+                let fov = spot_fov(l.outer_angle_deg);
                 let v = Mat4::look_at_rh(pos, pos + dir, safe_up(dir));
                 views.push((Mat4::perspective_rh(fov, 1.0, near, far) * v, pos));
             }
@@ -184,7 +191,7 @@ fn light_uniform(
                     (Vec3::NEG_Z, Vec3::NEG_Y),
                 ];
                 // Slightly wider than 90 degrees so PCF taps at face edges stay inside.
-                let proj = Mat4::perspective_rh(92f32.to_radians(), 1.0, near, far);
+                let proj = Mat4::perspective_rh(POINT_FACE_FOV_DEG.to_radians(), 1.0, near, far);
                 for (d, up) in faces {
                     views.push((proj * Mat4::look_at_rh(pos, pos + d, up), pos));
                 }
