@@ -9,7 +9,7 @@ use anyhow::Result;
 use clap::Args;
 use glam::{Mat4, Vec3};
 use subsurface_render::settings::Quality;
-use subsurface_render::{LateralPass, Scene, SssFetch, SssMethod, TransmittanceMethod};
+use subsurface_render::{MapEvaluation, Scene, SssFetch, SssMethod, TransmittanceMethod};
 
 #[derive(Args, Debug, Clone, Default)]
 pub struct SettingsArgs {
@@ -99,16 +99,16 @@ pub struct SettingsArgs {
     /// a texel); each pixel reads the lights' sum once, interpolated on its own surface, and
     /// where the map has no texel of it (an outline) runs each light's chord itself; skin whose
     /// texels would span more than 4 MM runs everything at each pixel; 0 = at every pixel
-    /// [default: render.transmittance.lateral_texel_mm, 4].
-    #[arg(long, value_name = "MM")]
-    pub lateral_texel_mm: Option<f32>,
-    /// Diffusion: how the lateral map is evaluated, compute (its raster pass records each
+    /// [default: render.transmitted_map.texel_mm, 4].
+    #[arg(long, value_name = "MM", alias = "lateral-texel-mm")]
+    pub map_texel_mm: Option<f32>,
+    /// Diffusion: how the transmitted map is evaluated, compute (its raster pass records each
     /// texel's surface, then a compute shader per object evaluates it; adapters without
     /// storage textures fall back to fragment) or fragment (in the raster pass's fragment
-    /// shader); the same map at a different cost [default: render.transmittance.lateral_pass,
+    /// shader); the same map at a different cost [default: render.transmitted_map.pass,
     /// compute].
-    #[arg(long, value_name = "PASS")]
-    pub lateral_pass: Option<LateralPass>,
+    #[arg(long, value_name = "PASS", alias = "lateral-pass")]
+    pub map_pass: Option<MapEvaluation>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
@@ -200,8 +200,8 @@ impl SettingsArgs {
         set!(self.transmittance, r.transmittance.method);
         set!(self.thickness_filter, r.transmittance.thickness_filter);
         set!(self.lateral_taps, r.transmittance.lateral_taps);
-        set!(self.lateral_texel_mm, r.transmittance.lateral_texel_mm);
-        set!(self.lateral_pass, r.transmittance.lateral_pass);
+        set!(self.map_texel_mm, r.transmitted_map.texel_mm);
+        set!(self.map_pass, r.transmitted_map.pass);
         set!(self.normal_shrink, r.transmittance.normal_shrink);
         set!(self.bounce_ring, r.bounce.ring);
         set!(self.bounce_cell_mm, r.bounce.cell_mm);
@@ -400,7 +400,7 @@ mod tests {
             samples: Some(9),
             jitter: true,
             sss_fetch: Some(SssFetch::Direct),
-            lateral_pass: Some(LateralPass::Fragment),
+            map_pass: Some(MapEvaluation::Fragment),
             sss: Some(SssMethod::Hable13),
             sss_width: Some(2.0),
             kernel_strength: Some([1.0, 0.5, 0.25]),
@@ -411,8 +411,8 @@ mod tests {
         assert!(scene.desc.render.sss.jitter);
         assert_eq!(scene.desc.render.sss.fetch, SssFetch::Direct);
         assert_eq!(
-            scene.desc.render.transmittance.lateral_pass,
-            LateralPass::Fragment
+            scene.desc.render.transmitted_map.pass,
+            MapEvaluation::Fragment
         );
         assert_eq!(scene.desc.render.sss.method, SssMethod::Hable13);
         for (o, d) in scene.objects.iter().zip(&scene.desc.objects) {

@@ -224,17 +224,17 @@ fn bench_measures_diffusion_at_each_lateral_tap_count() {
     );
 }
 
-/// `--lateral-texel-mm 0,20` measures `diffusion` with the taps at every pixel and on the
-/// lateral map: each run says the reduction it got, and only the map's run times a lateral
+/// `--map-texel-mm 0,20` measures `diffusion` with the taps at every pixel and on the
+/// transmitted map: each run says the reduction it got, and only the map's run times a lateral
 /// pass (at 64x48 the default hand's pixels are about 7 profile mm, so 20 mm gives 2x2).
 #[test]
-fn bench_measures_diffusion_with_and_without_the_lateral_map() {
+fn bench_measures_diffusion_with_and_without_the_transmitted_map() {
     let args = small_bench(&[
         "--sss",
         "none",
         "--transmittance",
         "diffusion",
-        "--lateral-texel-mm",
+        "--map-texel-mm",
         "0,20",
     ]);
     let Some((_, out)) = run_with_gpu("bench", &args) else {
@@ -249,10 +249,10 @@ fn bench_measures_diffusion_with_and_without_the_lateral_map() {
                 .as_array()
                 .unwrap()
                 .iter()
-                .any(|p| p["name"] == "lateral" && p["ms"].as_f64().unwrap() > 0.0);
+                .any(|p| p["name"] == "transmitted" && p["ms"].as_f64().unwrap() > 0.0);
             (
-                r["lateral_texel_mm"].as_f64(),
-                r["lateral_downsample"].as_u64(),
+                r["map_texel_mm"].as_f64(),
+                r["map_downsample"].as_u64(),
                 lateral,
             )
         })
@@ -261,7 +261,7 @@ fn bench_measures_diffusion_with_and_without_the_lateral_map() {
     assert_eq!(got[0], (Some(0.0), Some(1), false));
     assert_eq!(got[1].0, Some(20.0));
     assert!(got[1].1.is_some_and(|d| d > 1), "{got:?}");
-    assert!(got[1].2, "no lateral pass timed: {got:?}");
+    assert!(got[1].2, "no map pass timed: {got:?}");
 }
 
 /// The few-sample mode's quality against more fixed taps, and the byte model beside the

@@ -245,14 +245,14 @@ struct MaterialData {
 }
 
 /// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
-/// taps and the bounce gathered per pixel (the lateral map is a lower-rate evaluation inside
+/// taps and the bounce gathered per pixel (the transmitted map is a lower-rate evaluation inside
 /// our renderer), and without the diffusion source's shadow shift (a term of our lighting
 /// pass's reflected light, which a caller's forward pass computes its own way).
 pub fn example_settings(scene: &Scene, width: u32, height: u32) -> RenderSettings {
     let mut s = scene.desc.render.clone();
     s.width = width;
     s.height = height;
-    s.transmittance.lateral_texel_mm = 0.0;
+    s.transmitted_map.texel_mm = 0.0;
     s.sss.source_shift = false;
     s
 }
@@ -290,8 +290,8 @@ pub fn render(
     let view_proj = Mat4::from_cols_array_2d(&camera.view_proj);
     let setup = light_setup(scene, settings)?;
     let mut lights_uniform: LightsUniform = setup.uniform;
-    // No lateral map: the skin passes below run their taps and the bounce's gather per pixel.
-    lights_uniform.lateral_downsample = 1;
+    // No transmitted map: the skin passes below run their taps and the bounce's gather per pixel.
+    lights_uniform.map_downsample = 1;
     lights_uniform.bounce_ring = settings.bounce.ring;
 
     // The program's own materials and meshes.

@@ -5,12 +5,12 @@
 //! ```text
 //! shadow maps ──► flux pyramid (bounce) ──┐
 //!      │                                  ▼
-//!      ├──────────────► lateral map (transmitted light, bounce; 1/N resolution)
+//!      ├──────────────► transmitted map (transmitted light, bounce; 1/N resolution)
 //!      ▼                                  ▼
 //! depth prepass ──► lighting (diffuse, specular, depth, skin) ──► SSS blur ──► tone map
 //! ```
 //!
-//! Every decision that used to be read back from `LightsUniform` lives here: the lateral
+//! Every decision that used to be read back from `LightsUniform` lives here: the transmitted
 //! map's reduction and layers, whether it holds `diffusion`'s transmitted light, whether and
 //! where the bounce is gathered, each lighting pipeline's variant, which objects gather their
 //! own lateral taps, and each object's box on screen.
@@ -20,14 +20,14 @@ use glam::{Mat4, Vec3};
 use crate::gpu_scene::{camera_uniform, world_per_mm};
 use crate::passes::overrides::{Terms, bounce, lateral};
 use crate::scene::{LightKind, Scene};
-use crate::settings::{LateralPass, RenderSettings, SssMethod, TransmittanceMethod};
+use crate::settings::{MapEvaluation, RenderSettings, SssMethod, TransmittanceMethod};
 use crate::uniforms::LightsUniform;
 
 /// What the adapter can do that changes the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AdapterFeatures {
     /// Storage textures and workgroups large enough for the compute passes (the flux pyramid,
-    /// the lateral map's compute evaluation, the workgroup SSS fetch).
+    /// the transmitted map's compute evaluation, the workgroup SSS fetch).
     pub compute_storage: bool,
 }
 
@@ -45,27 +45,27 @@ impl AdapterFeatures {
     }
 }
 
-/// The layers of the lateral map that hold `diffusion`'s transmitted light (0 diffuse, 1
+/// The layers of the transmitted map that hold `diffusion`'s transmitted light (0 diffuse, 1
 /// unscattered and singly scattered); the bounce's layer, if any, follows them.
 pub const TRANSMITTED_LAYERS: u32 = 2;
 
-/// What a lateral map is made of: its reduction (1: no map) and its layers (the transmitted
+/// What a transmitted map is made of: its reduction (1: no map) and its layers (the transmitted
 /// light's, and the bounce's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LateralShape {
+pub struct TransmittedMapShape {
     /// One map texel per `downsample` x `downsample` pixels; 1: no map.
     pub downsample: u32,
     /// Array layers: [`TRANSMITTED_LAYERS`] when the map holds the transmitted light, then one
     /// when it holds the bounce; 0: no map.
     pub layers: u32,
     /// The transmitted light and the bounce are evaluated by compute shaders on the texels'
-    /// surfaces (`LateralPass::Compute` on an adapter that runs them) rather than in the
+    /// surfaces (`MapEvaluation::Compute` on an adapter that runs them) rather than in the
     /// map's fragment shaders.
     pub compute: bool,
 }
 
-impl LateralShape {
-    /// No lateral map.
+impl TransmittedMapShape {
+    /// No transmitted map.
     pub const NONE: Self = Self {
         downsample: 1,
         layers: 0,
@@ -82,9 +82,9 @@ impl LateralShape {
 pub struct LightingVariant {
     /// The transmittance method's code (`TransmittanceMethod::code`).
     pub method: u32,
-    /// 0 no bounce, 1 the lateral map's bounce layer, 2 a gather per pixel (no map).
+    /// 0 no bounce, 1 the transmitted map's bounce layer, 2 a gather per pixel (no map).
     pub bounce: u32,
-    /// 0 no lateral light (another method, or no taps), 1 the lateral map (the lights' chords
+    /// 0 no lateral light (another method, or no taps), 1 the transmitted map (the lights' chords
     /// per pixel only where the map has no texel of the pixel's surface), 2 the taps per pixel
     /// (no map; with a map, the variant [`FramePlan::taps_objects`] are drawn with).
     pub lateral: u32,
@@ -100,23 +100,23 @@ pub struct FramePlan {
     pub width: u32,
     /// Frame height in pixels.
     pub height: u32,
-    /// The lateral map's reduction: one texel per `N` x `N` pixels (1: the taps run per pixel).
-    pub lateral_downsample: u32,
-    /// The lateral map holds `diffusion`'s transmitted light, every light summed, in its first
+    /// The transmitted map's reduction: one texel per `N` x `N` pixels (1: the taps run per pixel).
+    pub map_downsample: u32,
+    /// The transmitted map holds `diffusion`'s transmitted light, every light summed, in its first
     /// [`TRANSMITTED_LAYERS`] layers.
-    pub transmitted_map: bool,
+    pub map_holds_transmitted: bool,
     /// `BounceSettings::ring` where the bounce runs (0: it does not).
     pub bounce_ring: u32,
-    /// The lateral map's layer the bounce is gathered into, if it is gathered on the map.
+    /// The transmitted map's layer the bounce is gathered into, if it is gathered on the map.
     pub bounce_layer: Option<u32>,
-    /// The lateral map's shape ([`LateralShape::NONE`]: no map).
-    pub lateral: LateralShape,
+    /// The transmitted map's shape ([`TransmittedMapShape::NONE`]: no map).
+    pub map: TransmittedMapShape,
     /// The lighting pipeline most pixels are drawn with.
     pub lighting: LightingVariant,
     /// For each uploaded object (those with triangles, in the scene's order): it gathers
-    /// `diffusion`'s lateral taps itself although the frame has a lateral map.
+    /// `diffusion`'s lateral taps itself although the frame has a transmitted map.
     pub taps_objects: Vec<bool>,
-    /// Each uploaded object's box on screen, for the lateral map's compute dispatches.
+    /// Each uploaded object's box on screen, for the transmitted map's compute dispatches.
     pub object_rects: Vec<Option<[u32; 4]>>,
 }
 
@@ -127,11 +127,11 @@ impl FramePlan {
         let (width, height) = (settings.width, settings.height);
         let t = &settings.transmittance;
         let lights = &scene.desc.lights;
-        let lateral_downsample = lateral_downsample(scene, settings, width, height);
+        let map_downsample = map_downsample(scene, settings, width, height);
         let shadowed = lights.iter().any(|l| l.shadow_map_size > 0);
         let diffusion_taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
         // Lights without a shadow map transmit nothing.
-        let transmitted_map = diffusion_taps && lateral_downsample > 1 && shadowed;
+        let map_holds_transmitted = diffusion_taps && map_downsample > 1 && shadowed;
         // Point lights' six faces are not gathered (bounce.wgsl): only the others count.
         let bounced = lights
             .iter()
@@ -147,23 +147,24 @@ impl FramePlan {
             }
         }
         let bounce_layer =
-            (bounce_ring > 0 && lateral_downsample > 1).then_some(if transmitted_map {
+            (bounce_ring > 0 && map_downsample > 1).then_some(if map_holds_transmitted {
                 TRANSMITTED_LAYERS
             } else {
                 0
             });
         let layers = match bounce_layer {
             Some(layer) => layer + 1,
-            None if transmitted_map => TRANSMITTED_LAYERS,
+            None if map_holds_transmitted => TRANSMITTED_LAYERS,
             None => 0,
         };
-        let lateral = if layers == 0 {
-            LateralShape::NONE
+        let map = if layers == 0 {
+            TransmittedMapShape::NONE
         } else {
-            LateralShape {
-                downsample: lateral_downsample,
+            TransmittedMapShape {
+                downsample: map_downsample,
                 layers,
-                compute: t.lateral_pass == LateralPass::Compute && features.compute_storage,
+                compute: settings.transmitted_map.pass == MapEvaluation::Compute
+                    && features.compute_storage,
             }
         };
         let lighting = LightingVariant {
@@ -173,7 +174,7 @@ impl FramePlan {
                 (_, Some(_)) => bounce::MAP,
                 (_, None) => bounce::GATHER,
             },
-            lateral: match (diffusion_taps, lateral_downsample > 1) {
+            lateral: match (diffusion_taps, map_downsample > 1) {
                 (false, _) => lateral::NONE,
                 (true, true) => lateral::MAP,
                 (true, false) => lateral::TAPS,
@@ -183,23 +184,23 @@ impl FramePlan {
         Self {
             width,
             height,
-            lateral_downsample,
-            transmitted_map,
+            map_downsample,
+            map_holds_transmitted,
             bounce_ring,
             bounce_layer,
-            lateral,
+            map,
             lighting,
-            taps_objects: lateral_taps_objects(scene, settings, width, height, lateral_downsample),
+            taps_objects: lateral_taps_objects(scene, settings, width, height, map_downsample),
             object_rects: screen_rects(scene, width, height),
         }
     }
 
-    /// Writes what the shaders read of the plan into the lights' uniform: the lateral map's
+    /// Writes what the shaders read of the plan into the lights' uniform: the transmitted map's
     /// reduction, the bounce's ring and layer.
     pub fn write_lights(&self, lights: &mut LightsUniform) {
-        lights.lateral_downsample = self.lateral_downsample;
+        lights.map_downsample = self.map_downsample;
         lights.bounce_ring = self.bounce_ring;
-        lights.bounce_layer = if self.transmitted_map {
+        lights.bounce_layer = if self.map_holds_transmitted {
             TRANSMITTED_LAYERS
         } else {
             0
@@ -207,19 +208,14 @@ impl FramePlan {
     }
 }
 
-/// The lateral map's reduction for `scene` at `width` x `height` with `settings`
-/// ([`crate::settings::lateral_downsample`]): from the pixel's size in profile millimetres on
+/// The transmitted map's reduction for `scene` at `width` x `height` with `settings`
+/// ([`crate::settings::map_downsample`]): from the pixel's size in profile millimetres on
 /// the translucent object in view nearest in those terms (`skin_pixel_mm`), so that the
 /// map's texels are the same millimetres at any resolution and zoom (a farther object whose
 /// texels come out too coarse gathers its own taps, [`lateral_taps_objects`]). 1 (no
 /// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
 /// transmitted light from its UV-space pass).
-pub fn lateral_downsample(
-    scene: &Scene,
-    settings: &RenderSettings,
-    width: u32,
-    height: u32,
-) -> u32 {
+pub fn map_downsample(scene: &Scene, settings: &RenderSettings, width: u32, height: u32) -> u32 {
     let t = &settings.transmittance;
     let taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
     // The bounce is gathered on the same map (passes::bounce): it too changes over
@@ -231,7 +227,7 @@ pub fn lateral_downsample(
         .into_iter()
         .flatten()
         .fold(f32::INFINITY, f32::min);
-    crate::settings::lateral_downsample(t.lateral_texel_mm, pixel_mm)
+    crate::settings::map_downsample(settings.transmitted_map.texel_mm, pixel_mm)
 }
 
 /// For each object of `scene` seen at `width` x `height`: the size of a pixel in its profile
@@ -258,9 +254,9 @@ fn skin_pixel_mm(scene: &Scene, width: u32, height: u32) -> Vec<Option<f32>> {
 
 /// Which of the uploaded objects (those with triangles, in the scene's order, as
 /// [`upload_objects`] makes them) gather `diffusion`'s lateral taps at each pixel although the
-/// frame has a lateral map of reduction `downsample`: skin so much farther than the nearest
+/// frame has a transmitted map of reduction `downsample`: skin so much farther than the nearest
 /// that its texels would span more than [`crate::settings::MAX_TEXEL_FACTOR`] times
-/// `lateral_texel_mm`. The lighting pass draws them with a pipeline that holds the taps
+/// `transmitted_map.texel_mm`. The lighting pass draws them with a pipeline that holds the taps
 /// ([`LightingVariant::lateral`]); every other pixel reads the map with one that does not.
 ///
 /// [`upload_objects`]: crate::gpu_scene::upload_objects
@@ -271,8 +267,7 @@ pub fn lateral_taps_objects(
     height: u32,
     downsample: u32,
 ) -> Vec<bool> {
-    let t = &settings.transmittance;
-    let limit = crate::settings::MAX_TEXEL_FACTOR * t.lateral_texel_mm;
+    let limit = crate::settings::MAX_TEXEL_FACTOR * settings.transmitted_map.texel_mm;
     let coarse = |mm: Option<f32>| mm.is_some_and(|mm| downsample as f32 * mm > limit);
     scene
         .objects
@@ -286,7 +281,7 @@ pub fn lateral_taps_objects(
 /// Each uploaded object's box on a `width` x `height` frame (those with triangles, in the
 /// scene's order, as [`upload_objects`] makes them): the pixels `[x0, y0, x1, y1)` its world
 /// bounds project to, the whole frame where the bounds reach behind the camera's eye, `None`
-/// where they lie outside the view. The lateral map's compute evaluation dispatches over each
+/// where they lie outside the view. The transmitted map's compute evaluation dispatches over each
 /// object's box alone ([`FramePlan::object_rects`]).
 ///
 /// [`upload_objects`]: crate::gpu_scene::upload_objects
@@ -419,10 +414,10 @@ mod tests {
     use super::*;
 
     fn downsample(scene: &Scene, settings: &RenderSettings, w: u32, h: u32) -> u32 {
-        lateral_downsample(scene, settings, w, h)
+        map_downsample(scene, settings, w, h)
     }
 
-    /// Each object's box on screen holds every vertex of it (the lateral map's compute
+    /// Each object's box on screen holds every vertex of it (the transmitted map's compute
     /// dispatch covers only the box), is far smaller than the frame for the default scene's
     /// hand and wedge, and is the whole frame for an object reaching behind the camera.
     #[test]
@@ -464,10 +459,10 @@ mod tests {
         assert_eq!(screen_rects(&scene, w, h)[0], Some([0, 0, w, h]));
     }
 
-    /// The map's texels stay about `lateral_texel_mm` on the skin: twice the pixels, twice
+    /// The map's texels stay about `transmitted_map.texel_mm` on the skin: twice the pixels, twice
     /// the reduction (up to 8), 2 for skin small on screen and none where it is smaller still.
     #[test]
-    fn lateral_map_reduction_follows_the_skin_on_screen() {
+    fn transmitted_map_reduction_follows_the_skin_on_screen() {
         let scene = Scene::default_scene();
         let s = high(&scene);
         let (r256, r512) = (
@@ -480,11 +475,11 @@ mod tests {
         assert_eq!(downsample(&scene, &s, 64, 64), 2);
         assert_eq!(downsample(&scene, &s, 32, 32), 1);
         let mut per_pixel = s.clone();
-        per_pixel.transmittance.lateral_texel_mm = 0.0;
+        per_pixel.transmitted_map.texel_mm = 0.0;
         assert_eq!(downsample(&scene, &per_pixel, 512, 512), 1);
     }
 
-    /// Skin whose texels would span more than `MAX_TEXEL_FACTOR` times `lateral_texel_mm`
+    /// Skin whose texels would span more than `MAX_TEXEL_FACTOR` times `transmitted_map.texel_mm`
     /// gathers the taps itself: none of the default scene's objects, and every object but the
     /// nearest once moved back to six times its distance along the view (the map stays sized
     /// for the nearest).
@@ -529,7 +524,7 @@ mod tests {
     /// taps, texture-space diffusion (its transmitted light comes from UV space), no
     /// translucent object in view.
     #[test]
-    fn no_lateral_map_where_nothing_reads_it() {
+    fn no_transmitted_map_where_nothing_reads_it() {
         let scene = Scene::default_scene();
         let mut s = high(&scene);
         let mut paper = s.clone();
@@ -551,7 +546,7 @@ mod tests {
         assert_eq!(downsample(&away, &s, 512, 512), 1);
     }
 
-    /// `scene`'s settings at `Quality::High`: the lateral map and the bounce both run.
+    /// `scene`'s settings at `Quality::High`: the transmitted map and the bounce both run.
     fn high(scene: &Scene) -> RenderSettings {
         let mut desc = scene.desc.clone();
         desc.set_quality(crate::settings::Quality::High).unwrap();
@@ -568,9 +563,9 @@ mod tests {
     fn the_lateral_light_comes_from_the_map_wherever_there_is_one() {
         let scene = Scene::default_scene();
         let mut s = high(&scene);
-        assert!(plan(&scene, &s).lateral_downsample > 1);
+        assert!(plan(&scene, &s).map_downsample > 1);
         assert_eq!(plan(&scene, &s).lighting.lateral, 1);
-        s.transmittance.lateral_texel_mm = 0.0;
+        s.transmitted_map.texel_mm = 0.0;
         assert_eq!(plan(&scene, &s).lighting.lateral, 2);
         s.transmittance.lateral_taps = 0;
         assert_eq!(plan(&scene, &s).lighting.lateral, 0);
@@ -579,7 +574,7 @@ mod tests {
         assert_eq!(plan(&scene, &s).lighting.lateral, 0);
     }
 
-    /// The lateral pass evaluates the transmitted light only for `diffusion` with taps, a map
+    /// The map pass evaluates the transmitted light only for `diffusion` with taps, a map
     /// and a shadowed light, into two layers before the bounce's; the bounce alone takes a
     /// map of one layer, and an adapter without compute storage has no bounce.
     #[test]
@@ -588,29 +583,26 @@ mod tests {
         let mut s = high(&scene);
         s.bounce = crate::settings::BounceSettings::OFF;
         let p = plan(&scene, &s);
-        assert!(p.transmitted_map);
-        assert_eq!(
-            (p.lateral.layers, p.bounce_layer),
-            (TRANSMITTED_LAYERS, None)
-        );
+        assert!(p.map_holds_transmitted);
+        assert_eq!((p.map.layers, p.bounce_layer), (TRANSMITTED_LAYERS, None));
         let mut unshadowed = scene.clone();
         for l in &mut unshadowed.desc.lights {
             l.shadow_map_size = 0;
         }
         let p = plan(&unshadowed, &s);
-        assert!(!p.transmitted_map, "no light has a shadow map");
-        assert_eq!(p.lateral, LateralShape::NONE);
+        assert!(!p.map_holds_transmitted, "no light has a shadow map");
+        assert_eq!(p.map, TransmittedMapShape::NONE);
         let with_bounce = high(&scene);
         assert!(with_bounce.bounce.enabled());
         let p = plan(&scene, &with_bounce);
         assert_eq!(p.bounce_layer, Some(TRANSMITTED_LAYERS));
-        assert_eq!(p.lateral.layers, TRANSMITTED_LAYERS + 1);
+        assert_eq!(p.map.layers, TRANSMITTED_LAYERS + 1);
         assert_eq!(p.lighting.bounce, 1);
         let mut paper = with_bounce.clone();
         paper.transmittance.method = TransmittanceMethod::Paper;
         let p = plan(&scene, &paper);
-        assert!(!p.transmitted_map);
-        assert_eq!((p.bounce_layer, p.lateral.layers), (Some(0), 1));
+        assert!(!p.map_holds_transmitted);
+        assert_eq!((p.bounce_layer, p.map.layers), (Some(0), 1));
         let none = AdapterFeatures {
             compute_storage: false,
         };
@@ -619,15 +611,15 @@ mod tests {
             (p.bounce_ring, p.bounce_layer, p.lighting.bounce),
             (0, None, 0)
         );
-        assert!(!p.lateral.compute);
+        assert!(!p.map.compute);
         for off in [
             |s: &mut RenderSettings| s.transmittance.lateral_taps = 0,
-            |s: &mut RenderSettings| s.transmittance.lateral_texel_mm = 0.0,
+            |s: &mut RenderSettings| s.transmitted_map.texel_mm = 0.0,
             |s: &mut RenderSettings| s.transmittance.method = TransmittanceMethod::Paper,
         ] {
             let mut other = with_bounce.clone();
             off(&mut other);
-            assert!(!plan(&scene, &other).transmitted_map);
+            assert!(!plan(&scene, &other).map_holds_transmitted);
         }
     }
 }

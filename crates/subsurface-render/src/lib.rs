@@ -29,9 +29,9 @@ pub use passes::tonemap::DebugView;
 pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
-    BounceSettings, DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE,
-    MAX_TEXEL_FACTOR, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, SssSettings,
-    TransmittanceMethod, TransmittanceSettings,
+    BounceSettings, DEFAULT_MAP_TEXEL_MM, MAX_MAP_DOWNSAMPLE, MAX_TEXEL_FACTOR, MapEvaluation,
+    RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, SssSettings, TransmittanceMethod,
+    TransmittanceSettings, TransmittedMapSettings,
 };
 pub use timing::PassTiming;
 
@@ -91,7 +91,7 @@ mod shader_tests {
             // Each term alone and none: every `has_term` branch compiles either way.
             let terms = [7, 0, 1, 2, 4][usize::from(code as u8) % 5];
             constants.insert("DIFFUSION_TERMS".into(), f64::from(terms));
-            // The lateral map's compute evaluation (lateral.wgsl) is specialized alike.
+            // The transmitted map's compute evaluation (transmitted_map.wgsl) is specialized alike.
             let entries = [
                 (naga::ShaderStage::Fragment, "fs_main"),
                 (naga::ShaderStage::Fragment, "fs_transmitted"),

@@ -39,7 +39,7 @@ fn safe_up(dir: Vec3) -> Vec3 {
 
 /// Light-space matrices and uniforms, with the ambient light and transmittance of `settings`.
 /// Shadow near/far planes are fitted to the scene's bounding sphere so that depth precision is
-/// spent where the geometry is. What the frame is made of (the lateral map, the bounce) is the
+/// spent where the geometry is. What the frame is made of (the transmitted map, the bounce) is the
 /// frame plan's to decide and to write ([`crate::frame_plan::FramePlan::write_lights`]).
 pub fn light_setup(scene: &Scene, settings: &RenderSettings) -> Result<LightSetup, RenderError> {
     let transmittance = &settings.transmittance;

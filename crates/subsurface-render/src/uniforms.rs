@@ -79,9 +79,9 @@ pub struct LightsUniform {
     /// `diffusion`: shadow-map taps of the lit surface around the chord (0: the chord alone).
     pub lateral_taps: u32,
     /// 1: the lateral taps run per pixel; N > 1: the lighting pass reads them from the lateral
-    /// map at 1/N resolution (`passes::lateral_map::LateralTargets`).
-    pub lateral_downsample: u32,
-    /// The lateral map's layer that holds the bounce gathered at its texels
+    /// map at 1/N resolution (`passes::transmitted_map::TransmittedMapTargets`).
+    pub map_downsample: u32,
+    /// The transmitted map's layer that holds the bounce gathered at its texels
     /// (`passes::bounce`).
     pub bounce_layer: u32,
     /// `BounceSettings::ring`: 0 = no bounce.
@@ -131,7 +131,7 @@ pub struct ObjectUniform {
     /// The medium's slowest decay rate per mm, which spreads the lateral taps
     /// (`subsurface_profile::TransportTable::lateral_decay_per_mm`).
     pub lateral_decay: f32,
-    /// The object's index in the frame's draw list: the lateral map's surface targets record
+    /// The object's index in the frame's draw list: the transmitted map's surface targets record
     /// it, and each object's compute dispatch evaluates only its own texels.
     pub index: u32,
     /// Padding to the WGSL layout.
@@ -297,7 +297,7 @@ mod layout_tests {
             normal_shrink,
             sss_runs,
             lateral_taps,
-            lateral_downsample,
+            map_downsample,
             bounce_layer,
             bounce_ring,
             bounce_cell_mm,

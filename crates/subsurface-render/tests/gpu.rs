@@ -434,7 +434,7 @@ fn update_builds_the_pipeline_of_a_new_transmittance_method() {
 /// The viewer's bounce slider: `update` from no bounce to the bounce builds the flux pyramid
 /// and binds it (a new lighting pass and a map layer more), giving a fresh renderer's image;
 /// a light moved with the bounce on rewrites the pyramid's light cameras; back to no bounce
-/// gives the first image again. At 96x64 the skin is too small on screen for a lateral map,
+/// gives the first image again. At 96x64 the skin is too small on screen for a transmitted map,
 /// so the pixels gather the bounce themselves; at 256x256 it is read from the map.
 #[test]
 fn update_turns_the_bounce_on_and_off() {
@@ -470,28 +470,28 @@ fn update_turns_the_bounce_on_and_off() {
     }
 }
 
-/// Moving the camera nearer makes the skin larger on screen, so the lateral map's reduction
+/// Moving the camera nearer makes the skin larger on screen, so the transmitted map's reduction
 /// (texels of about 4 profile mm) grows: `update` must give the new map the frame a fresh
 /// renderer gives, without new frame-sized targets.
 #[test]
-fn update_follows_the_lateral_map_reduction() {
+fn update_follows_the_transmitted_map_reduction() {
     let Some(ctx) = context() else { return };
     let scene = subsurface_render::Scene::default_scene();
     let opts = options(&scene, 128, 128);
     let mut r = Renderer::new(&ctx, &scene, opts.clone()).unwrap();
     r.render().unwrap();
-    let before = r.targets.lateral_downsample();
+    let before = r.targets.map_downsample();
     let mut nearer = scene.clone();
     nearer.desc.camera.position = [0.01, 0.0, 0.25];
     r.update(&nearer, &opts).unwrap();
-    let after = r.targets.lateral_downsample();
+    let after = r.targets.map_downsample();
     assert!(
         after > before,
         "reduction {before} before, {after} with the camera twice as near"
     );
     let updated = r.render().unwrap().image;
     let mut fresh = Renderer::new(&ctx, &nearer, opts).unwrap();
-    assert_eq!(fresh.targets.lateral_downsample(), after);
+    assert_eq!(fresh.targets.map_downsample(), after);
     let fresh = fresh.render().unwrap().image;
     assert_eq!(
         updated.as_raw(),
@@ -500,7 +500,7 @@ fn update_follows_the_lateral_map_reduction() {
     );
 }
 
-/// The lateral pass sums every light's transmitted light into two layers (diffuse; unscattered
+/// The transmitted map's pass sums every light's transmitted light into two layers (diffuse; unscattered
 /// and singly scattered) in one pass. The default scene's two lights copied (four shadowed
 /// lights, each twice) must give twice what the two give, texel for texel, on the same
 /// surfaces; the bounce pass fills the layer after them, on those surfaces too.
@@ -510,7 +510,7 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
     let layers = |scene: &subsurface_render::Scene| {
         let mut r = Renderer::new(&ctx, scene, options(scene, 256, 256)).unwrap();
         r.render().unwrap();
-        let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+        let map = &r.targets.map.as_ref().expect("no transmitted map").map;
         assert_eq!(
             map.depth_or_array_layers(),
             3,
@@ -550,7 +550,7 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
         }
         assert!(lit > 50, "layer {layer}: only {lit} texels transmit light");
     }
-    // Every texel the lateral pass drew holds the bounce and that depth.
+    // Every texel the map's pass drew holds the bounce and that depth.
     let mut bounced = 0;
     for (t, b) in once[0].chunks_exact(4).zip(once[2].chunks_exact(4)) {
         assert!(t[3] == b[3], "a texel's depth differs between the passes");
@@ -561,7 +561,7 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
     assert!(bounced > 100, "only {bounced} texels received a bounce");
 }
 
-/// The lateral map from its compute evaluation (`fs_surface`, then `cs_clear`, and
+/// The transmitted map from its compute evaluation (`fs_surface`, then `cs_clear`, and
 /// `cs_transmitted` and `cs_bounce` once per object over its box) against its fragment shaders
 /// (`fs_transmitted`, `fs_bounce`): the same function at the same points, so the same numbers,
 /// for `diffusion` (the transmitted light's two layers and the bounce's) and for `paper` (the
@@ -574,8 +574,8 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
 /// - With all eight lights, each light has one invocation of a texel's eight
 ///   (`cs_transmitted`'s lanes), where with the scene's two it has four, which share its taps.
 #[test]
-fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
-    use subsurface_render::{LateralPass, TransmittanceMethod};
+fn the_transmitted_map_is_the_same_from_compute_and_fragment_shaders() {
+    use subsurface_render::{MapEvaluation, TransmittanceMethod};
     let Some(ctx) = context() else { return };
     let mut scene = subsurface_render::Scene::default_scene();
     assert_eq!(scene.objects.len(), 2, "the hand and the wedge");
@@ -601,21 +601,21 @@ fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
         let lights = scene.desc.lights.len();
         let mut moved = scene.clone();
         moved.desc.camera.position[0] += 0.15;
-        let frames = |pass: LateralPass| {
+        let frames = |pass: MapEvaluation| {
             let mut opts = options(scene, 256, 256);
             opts.settings.transmittance.method = method;
-            opts.settings.transmittance.lateral_pass = pass;
+            opts.settings.transmitted_map.pass = pass;
             let mut r = Renderer::new(&ctx, scene, opts.clone()).unwrap();
             let read = |r: &mut Renderer| {
                 r.render().unwrap();
                 if method == TransmittanceMethod::Diffusion {
                     assert_eq!(
-                        r.targets.lateral_computed(),
-                        Some(pass == LateralPass::Compute),
+                        r.targets.map_computed(),
+                        Some(pass == MapEvaluation::Compute),
                         "{pass}: evaluated elsewhere"
                     );
                 }
-                let map = &r.targets.lateral.as_ref().expect("no lateral map").map;
+                let map = &r.targets.map.as_ref().expect("no transmitted map").map;
                 assert_eq!(map.depth_or_array_layers(), layer_count, "{method}");
                 (0..layer_count)
                     .map(|l| {
@@ -629,7 +629,10 @@ fn the_lateral_map_is_the_same_from_compute_and_fragment_shaders() {
             r.update(&moved, &opts).unwrap();
             [first, read(&mut r)]
         };
-        let (compute, fragment) = (frames(LateralPass::Compute), frames(LateralPass::Fragment));
+        let (compute, fragment) = (
+            frames(MapEvaluation::Compute),
+            frames(MapEvaluation::Fragment),
+        );
         for (frame, (compute, fragment)) in compute.iter().zip(&fragment).enumerate() {
             for (layer, (computed, fragment)) in compute.iter().zip(fragment).enumerate() {
                 let at = format!("{method}, {lights} lights, frame {frame}, layer {layer}");

@@ -7,7 +7,7 @@ use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
 use subsurface_profile::specular::{rough_transmittance, schlick};
 use subsurface_render::SssMethod;
-use subsurface_render::{DEFAULT_LATERAL_TEXEL_MM, TransmittanceMethod};
+use subsurface_render::{DEFAULT_MAP_TEXEL_MM, TransmittanceMethod};
 use subsurface_render::{DebugView, Renderer, Scene};
 
 const SHRINK: f32 = 0.0001; // 0.1 mm at 1000 mm per unit
@@ -723,7 +723,7 @@ fn stepped_block_seen(
     opts.settings.sss.method = SssMethod::None;
     opts.settings.transmittance.method = TransmittanceMethod::Diffusion;
     opts.settings.transmittance.lateral_taps = lateral_taps;
-    opts.settings.transmittance.lateral_texel_mm = texel_mm;
+    opts.settings.transmitted_map.texel_mm = texel_mm;
     let mut r = Renderer::new(&ctx, &s, opts).unwrap();
     r.render().unwrap();
     r.read_diffuse().unwrap()
@@ -808,7 +808,7 @@ fn row_red(img: &[[f32; 4]]) -> Vec<(usize, f32)> {
         .collect()
 }
 
-/// The lateral map against the taps at every pixel where the lateral light changes fastest:
+/// The transmitted map against the taps at every pixel where the lateral light changes fastest:
 /// across the stepped block's step, where it falls several-fold within a few millimetres
 /// (1.7 mm a pixel here). Twelve taps are a quadrature with its own error there (up to 30 %
 /// at a pixel against 32 taps), so both are measured against the 32 taps at every pixel, the
@@ -816,7 +816,7 @@ fn row_red(img: &[[f32; 4]]) -> Vec<(usize, f32)> {
 /// lengths) and interpolated, must add no error of its own beyond a point on the mean, and
 /// stay within the taps' own worst. The map must be read (the images differ).
 #[test]
-fn lateral_map_keeps_the_taps_accuracy_across_a_step() {
+fn transmitted_map_keeps_the_taps_accuracy_across_a_step() {
     if context().is_none() {
         return;
     }
@@ -834,7 +834,7 @@ fn lateral_map_keeps_the_taps_accuracy_across_a_step() {
     };
     let per_pixel = stepped_block_with(taps, 0.0, false);
     let mapped = stepped_block_with(taps, 7.0, false);
-    assert_ne!(mapped, per_pixel, "the lateral map was not read");
+    assert_ne!(mapped, per_pixel, "the transmitted map was not read");
     let (pp_mean, pp_max) = errors(&per_pixel);
     let (map_mean, map_max) = errors(&mapped);
     assert!(
@@ -854,14 +854,14 @@ fn lateral_map_keeps_the_taps_accuracy_across_a_step() {
 /// the depth test the sheet's two pixels beside the edge read 0.005 and 0.015 of the block's
 /// light and the block's first two 13 % less.
 #[test]
-fn lateral_map_does_not_cross_depth_edges() {
+fn transmitted_map_does_not_cross_depth_edges() {
     if context().is_none() {
         return;
     }
     let taps = subsurface_profile::lateral::MAX_LATERAL_TAPS;
     let exact = stepped_block_with(taps, 0.0, true);
     let mapped = stepped_block_with(taps, 7.0, true);
-    assert_ne!(mapped, exact, "the lateral map was not read");
+    assert_ne!(mapped, exact, "the transmitted map was not read");
     let sheet: Vec<usize> = (0..32).filter(|&i| exact[32 * 64 + i][0] == 0.0).collect();
     assert!(sheet.len() > 10, "the sheet covers {} pixels", sheet.len());
     for i in sheet {
@@ -901,7 +901,7 @@ fn far_skin_gathers_its_own_taps() {
         &near,
     );
     let per_pixel = stepped_block_seen(taps, 0.0, 0.6, &near);
-    let mapped = stepped_block_seen(taps, DEFAULT_LATERAL_TEXEL_MM, 0.6, &near);
+    let mapped = stepped_block_seen(taps, DEFAULT_MAP_TEXEL_MM, 0.6, &near);
     let row = row_red(&truth);
     let mean_error = |img: &[[f32; 4]]| {
         row.iter()

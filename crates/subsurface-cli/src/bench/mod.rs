@@ -9,7 +9,7 @@ use clap::Args;
 use subsurface_profile::Medium;
 use subsurface_render::settings::Quality;
 use subsurface_render::{
-    BounceSettings, GpuContext, LateralPass, PassTiming, RenderOptions, RenderSettings, Renderer,
+    BounceSettings, GpuContext, MapEvaluation, PassTiming, RenderOptions, RenderSettings, Renderer,
     Scene, SssFetch, SssMethod, TransmittanceMethod,
 };
 
@@ -61,19 +61,29 @@ pub struct BenchArgs {
     /// [default: the scene's render.transmittance.lateral_taps].
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
     pub lateral_taps: Vec<u32>,
-    /// Diffusion runs: the lateral map's texel sizes in profile millimetres (0..=50),
+    /// Diffusion runs: the transmitted map's texel sizes in profile millimetres (0..=50),
     /// comma-separated, e.g. 0,2 for `diffusion` at every pixel inside the lighting pass against
-    /// the lateral pass's map [default: the scene's render.transmittance.lateral_texel_mm].
+    /// the transmitted map [default: the scene's render.transmitted_map.texel_mm].
     /// The table names each run by the reduction it gave (`diffusion/12:4`: 12 taps, one
     /// texel per 4x4 pixels).
-    #[arg(long, value_delimiter = ',', value_name = "MM,..")]
-    pub lateral_texel_mm: Vec<f32>,
-    /// Diffusion runs: how the lateral map is evaluated, compute and/or fragment,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "MM,..",
+        alias = "lateral-texel-mm"
+    )]
+    pub map_texel_mm: Vec<f32>,
+    /// Diffusion runs: how the transmitted map is evaluated, compute and/or fragment,
     /// comma-separated; the same map, so `compute,fragment` compares their cost [default: the
-    /// scene's render.transmittance.lateral_pass]. The table marks fragment runs
+    /// scene's render.transmitted_map.pass]. The table marks fragment runs
     /// (`diffusion/12:8 frag`).
-    #[arg(long, value_delimiter = ',', value_name = "PASS,..")]
-    pub lateral_pass: Vec<LateralPass>,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "PASS,..",
+        alias = "lateral-pass"
+    )]
+    pub map_pass: Vec<MapEvaluation>,
     /// The bounce's ring (0..=8; 0 = off), comma-separated, e.g. 0,2 for what gathering the
     /// light between parts costs [default: the scene's render.bounce.ring]. The table names
     /// each run's ring after its transmittance (`paper b2`).
@@ -417,15 +427,11 @@ fn axes_of(args: &BenchArgs) -> Vec<Axis> {
             &args.lateral_taps,
         ),
         flag_axis(
-            "--lateral-texel-mm",
-            "transmittance.lateral_texel_mm",
-            &args.lateral_texel_mm,
+            "--map-texel-mm",
+            "transmitted_map.texel_mm",
+            &args.map_texel_mm,
         ),
-        flag_axis(
-            "--lateral-pass",
-            "transmittance.lateral_pass",
-            &args.lateral_pass,
-        ),
+        flag_axis("--map-pass", "transmitted_map.pass", &args.map_pass),
         flag_axis("--bounce-ring", "bounce.ring", &args.bounce_ring),
     ]
     .into_iter()
@@ -443,7 +449,7 @@ fn without_skin(s: &RenderSettings) -> RenderSettings {
     bare
 }
 
-/// Fills in what a run reports beyond its times: the lateral map it got, the profiles, the
+/// Fills in what a run reports beyond its times: the transmitted map it got, the profiles, the
 /// varied keys, the byte model and, with `--flip-vs`, the quality against fixed taps.
 fn describe(
     run: &mut Run,
@@ -456,13 +462,13 @@ fn describe(
     let s = &plan.opts.settings;
     if s.transmittance.method == TransmittanceMethod::Diffusion {
         run.lateral_taps = Some(s.transmittance.lateral_taps);
-        run.lateral_texel_mm = Some(s.transmittance.lateral_texel_mm);
-        run.lateral_downsample = Some(renderer.targets.lateral_downsample());
-        run.lateral_pass = renderer.targets.lateral_computed().map(|computed| {
+        run.map_texel_mm = Some(s.transmitted_map.texel_mm);
+        run.map_downsample = Some(renderer.targets.map_downsample());
+        run.map_pass = renderer.targets.map_computed().map(|computed| {
             if computed {
-                LateralPass::Compute.name()
+                MapEvaluation::Compute.name()
             } else {
-                LateralPass::Fragment.name()
+                MapEvaluation::Fragment.name()
             }
         });
     }

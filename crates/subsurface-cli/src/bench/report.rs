@@ -30,16 +30,16 @@ pub(super) struct Run {
     /// Diffusion runs: the lateral shadow-map taps per shadowed light.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) lateral_taps: Option<u32>,
-    /// Diffusion runs: the lateral map's texel size asked for, and the reduction it gave (1:
+    /// Diffusion runs: the transmitted map's texel size asked for, and the reduction it gave (1:
     /// the taps run at every pixel).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) lateral_texel_mm: Option<f32>,
+    pub(super) map_texel_mm: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) lateral_downsample: Option<u32>,
-    /// Diffusion runs: how the lateral map was evaluated (`compute`, `fragment`; `fragment`
+    pub(super) map_downsample: Option<u32>,
+    /// Diffusion runs: how the transmitted map was evaluated (`compute`, `fragment`; `fragment`
     /// also where the adapter cannot run the compute evaluation).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) lateral_pass: Option<&'static str>,
+    pub(super) map_pass: Option<&'static str>,
     /// The bounce's ring (0: none).
     pub(super) bounce_ring: u32,
     /// The keys `--vary` (and the method flags) varied, with this run's values.
@@ -78,12 +78,12 @@ impl Run {
     /// The transmittance as the table names it: `diffusion/12:4` for diffusion with 12 lateral
     /// taps once per 4x4 pixels, so that `--lateral-taps 0,12` shows two rows.
     pub(super) fn transmittance_label(&self) -> String {
-        let label = match (self.lateral_taps, self.lateral_downsample) {
+        let label = match (self.lateral_taps, self.map_downsample) {
             (Some(taps), Some(d)) => format!("{}/{taps}:{d}", self.transmittance),
             (Some(taps), None) => format!("{}/{taps}", self.transmittance),
             _ => self.transmittance.clone(),
         };
-        let label = match self.lateral_pass {
+        let label = match self.map_pass {
             Some("fragment") => format!("{label} frag"),
             _ => label,
         };
@@ -98,8 +98,8 @@ impl Run {
             "sss.fetch",
             "transmittance.method",
             "transmittance.lateral_taps",
-            "transmittance.lateral_texel_mm",
-            "transmittance.lateral_pass",
+            "transmitted_map.texel_mm",
+            "transmitted_map.pass",
             "bounce.ring",
         ];
         let label = self
@@ -205,9 +205,9 @@ pub(super) fn summarise(samples: Vec<Vec<PassTiming>>, characters: u32, s: &Rend
         fetch: s.sss.fetch.name(),
         transmittance: s.transmittance.method.name().to_string(),
         lateral_taps: None,
-        lateral_texel_mm: None,
-        lateral_downsample: None,
-        lateral_pass: None,
+        map_texel_mm: None,
+        map_downsample: None,
+        map_pass: None,
         bounce_ring: s.bounce.ring,
         varied: BTreeMap::new(),
         frame_ms,
@@ -248,7 +248,7 @@ pub(super) fn table(report: &Report) -> String {
         "transm.",
         "frame ms",
         "shadow",
-        "lateral",
+        "map",
         "bounce",
         "lighting",
         "sss ms",
@@ -270,7 +270,7 @@ pub(super) fn table(report: &Report) -> String {
             r.transmittance_label(),
             r.frame_ms,
             p("shadow"),
-            p("lateral"),
+            p("transmitted"),
             p("bounce build") + p("bounce"),
             p("lighting"),
             sss,
@@ -307,13 +307,13 @@ fn per_light(report: &Report) -> String {
             && (
                 &a.transmittance,
                 a.lateral_taps,
-                a.lateral_downsample,
+                a.map_downsample,
                 a.bounce_ring,
                 &a.varied,
             ) == (
                 &b.transmittance,
                 b.lateral_taps,
-                b.lateral_downsample,
+                b.map_downsample,
                 b.bounce_ring,
                 &b.varied,
             )

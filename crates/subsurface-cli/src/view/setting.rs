@@ -9,7 +9,7 @@
 
 use subsurface_render::settings::{Quality, value_text};
 use subsurface_render::{
-    LateralPass, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, TransmittanceMethod,
+    MapEvaluation, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, TransmittanceMethod,
 };
 
 use super::state::Which;
@@ -149,7 +149,7 @@ pub fn choices(key: &str) -> Option<Vec<&'static str>> {
         "sss.method" => names(&SssMethod::ALL, SssMethod::name),
         "sss.fetch" => names(&SssFetch::ALL, SssFetch::name),
         "transmittance.method" => names(&TransmittanceMethod::ALL, TransmittanceMethod::name),
-        "transmittance.lateral_pass" => names(&LateralPass::ALL, LateralPass::name),
+        "transmitted_map.pass" => names(&MapEvaluation::ALL, MapEvaluation::name),
         "quality" => names(&Quality::ALL, Quality::name),
         _ => return None,
     })
@@ -223,7 +223,7 @@ mod tests {
             Kind::Choice(vec!["none", "gaussian6", "separable", "hable13", "texture"])
         );
         assert_eq!(
-            of("transmittance.lateral_pass"),
+            of("transmitted_map.pass"),
             Kind::Choice(vec!["compute", "fragment"])
         );
         assert!(matches!(of("ambient"), Kind::Array(k) if k.len() == 3

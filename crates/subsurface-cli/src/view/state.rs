@@ -282,13 +282,15 @@ mod tests {
                 thickness_filter: 5,
                 normal_shrink: 0.0007,
                 lateral_taps: 7,
-                lateral_texel_mm: 3.5,
-                lateral_pass: subsurface_render::LateralPass::Fragment,
                 ..Default::default()
             },
             view: DebugView::Final,
         };
         let d = &mut s.desc;
+        d.render.transmitted_map = subsurface_render::TransmittedMapSettings {
+            texel_mm: 3.5,
+            pass: subsurface_render::MapEvaluation::Fragment,
+        };
         d.render.exposure_ev = 1.25;
         d.render.width = 333;
         d.render.height = 211;

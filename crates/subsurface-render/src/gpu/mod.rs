@@ -206,7 +206,7 @@ async fn select_adapter(instance: &wgpu::Instance) -> Result<wgpu::Adapter, Rend
 }
 
 /// Whether the adapter runs the compute passes that write storage textures (the flux pyramid,
-/// the lateral map's compute evaluation, the workgroup SSS fetch): two storage textures per
+/// the transmitted map's compute evaluation, the workgroup SSS fetch): two storage textures per
 /// stage and workgroups of 128 invocations with 4 KiB of shared memory.
 pub fn supports_compute_storage(device: &wgpu::Device) -> bool {
     let l = device.limits();

@@ -13,7 +13,7 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
 
 /// Bind group layout of group 1 (`Object` + material maps), shared by shadow and lighting.
 pub fn object_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    // Compute too: the lateral map's evaluation (lateral.wgsl, `cs_transmitted`) reads the
+    // Compute too: the transmitted map's evaluation (transmitted_map.wgsl, `cs_transmitted`) reads the
     // object's uniform and LUT.
     let fragment = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let tex = |binding| {

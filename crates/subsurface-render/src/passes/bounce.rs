@@ -10,7 +10,7 @@
 //! cells a level: flux, flux-weighted position and normal sums), a compute pass after the
 //! shadow maps. `bounce.wgsl` (part of the lighting shader, `lighting::SHADER`) reads each level from
 //! `ring` to `2 ring` of its cells away from the shaded point, a few hundred reads in all, on
-//! the lateral map's reduced grid (`lateral_map::LateralTargets`, layer `bounce_layer`) where
+//! the transmitted map's reduced grid (`transmitted_map::TransmittedMapTargets`, layer `bounce_layer`) where
 //! there is one, per pixel elsewhere. The shaded point takes the bounce as irradiance, which
 //! joins the direct light before the subsurface blur.
 //!

@@ -1,5 +1,5 @@
 // The light one lit part of the skin sends another across the air (lighting/mod.rs puts this file
-// after transmittance.wgsl; the gather, the lateral map's bounce pass `fs_bounce` and a pixel's
+// after transmittance.wgsl; the gather, the transmitted map's bounce pass `fs_bounce` and a pixel's
 // bounce `pixel_bounce` are all here): gathered from the flux pyramid of each light's shadow map that
 // bounce_build.wgsl sums (a reflective shadow map, Dachsbacher and Stamminger 2005, summed
 // into cells so that a few hundred reads cover the whole map). Every cell sends on what the
@@ -19,7 +19,7 @@ fn bounce_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 // The rows `first_row`, `first_row + stride`, ... of each level's cells in
 // `bounce_irradiance`'s sum: invocations that share a texel each take a stride of the rows
-// (lateral.wgsl, `cs_bounce`).
+// (transmitted_map.wgsl, `cs_bounce`).
 fn bounce_rows(p: vec3<f32>, n: vec3<f32>, first_row: u32, stride: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let ring = f32(lights.bounce_ring);
@@ -127,7 +127,7 @@ fn bounce_rows(p: vec3<f32>, n: vec3<f32>, first_row: u32, stride: u32) -> vec3<
     return sum;
 }
 
-// The bounce at the lighting pass's pixel, interpolated from the lateral map's bounce layer
+// The bounce at the lighting pass's pixel, interpolated from the transmitted map's bounce layer
 // (fs_bounce): the bilinear 2 x 2 where all four texels lie on the pixel's surface (within
 // the tolerance of its plane, transmitted_from_map's test). Elsewhere the 4 x 4 texels around the
 // pixel, weighted by a tent two texels wide, where their surface lies within a quarter of the
@@ -137,7 +137,7 @@ fn bounce_rows(p: vec3<f32>, n: vec3<f32>, first_row: u32, stride: u32) -> vec3<
 // (the neck under the jaw, a finger's outline), whose nearest texels show the nearer
 // surface, still finds its own: with 2 x 2 alone the jaw's outline drew a dark seam.
 fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
-    let size = vec2<i32>(textureDimensions(lateral_map));
+    let size = vec2<i32>(textureDimensions(transmitted_map));
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
     let pos = screen.xy * scale - 0.5;
     let base = vec2<i32>(floor(pos)) - vec2<i32>(1);
@@ -151,7 +151,7 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
     for (var j = 1; j < 3; j++) {
         for (var i = 1; i < 3; i++) {
             let texel = base + vec2<i32>(i, j);
-            let t = textureLoad(lateral_map, clamp(texel, vec2<i32>(0), size - 1), layer, 0);
+            let t = textureLoad(transmitted_map, clamp(texel, vec2<i32>(0), size - 1), layer, 0);
             let w = select(1.0 - f.x, f.x, i == 2) * select(1.0 - f.y, f.y, j == 2);
             inside = inside && all(texel >= vec2<i32>(0)) && all(texel < size) && t.w > 0.0
                 && abs(t.w - plane_depth(screen, texel, scale)) <= tolerance;
@@ -170,7 +170,7 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
             if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
                 continue;
             }
-            let t = textureLoad(lateral_map, texel, layer, 0);
+            let t = textureLoad(transmitted_map, texel, layer, 0);
             let expected = plane_depth(screen, texel, scale);
             let gap = abs(t.w - screen.depth);
             if (t.w > 0.0 && gap < nearest.w) {
@@ -195,7 +195,7 @@ fn bounce_from_map(layer: u32, screen: ScreenSample) -> vec3<f32> {
 }
 
 // The bounce pass (passes::bounce): the light the lit surfaces send each texel's surface
-// across the air, gathered from the flux pyramid once per texel of the lateral map's reduced
+// across the air, gathered from the flux pyramid once per texel of the transmitted map's reduced
 // grid, as the lateral taps are: it changes over millimetres. a = the texel's view depth.
 @fragment
 fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
@@ -203,7 +203,7 @@ fn fs_bounce(in: LitVarying, @builtin(front_facing) front: bool) -> @location(0)
     return vec4<f32>(bounce_irradiance(in.world, oriented_normal(in, front)), depth);
 }
 
-// The bounce at the pixel: interpolated from the lateral map's bounce layer on the pixel's own
+// The bounce at the pixel: interpolated from the transmitted map's bounce layer on the pixel's own
 // surface; gathered here only where there is no map (the skin too small on screen for one).
 // Where the map has no texel of the pixel's surface (an outline, a depth edge) the pixel takes
 // none: gathering there per pixel, like the lateral taps, doubled the lighting pass on
@@ -216,7 +216,7 @@ fn pixel_bounce(world: vec3<f32>, n_vertex: vec3<f32>, screen: ScreenSample) -> 
     if (BOUNCE_SOURCE == BOUNCE_NONE || lights.bounce_ring == 0u) {
         return vec3<f32>(0.0);
     }
-    if (BOUNCE_SOURCE == BOUNCE_MAP || (BOUNCE_SOURCE == FOLLOW_UNIFORM && lights.lateral_downsample > 1u)) {
+    if (BOUNCE_SOURCE == BOUNCE_MAP || (BOUNCE_SOURCE == FOLLOW_UNIFORM && lights.map_downsample > 1u)) {
         return bounce_from_map(lights.bounce_layer, screen);
     }
     return bounce_irradiance(world, n_vertex);

@@ -41,8 +41,8 @@ struct Lights {
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
     sss_runs: u32,         // 1: subsurface scattering runs (source_shadow in shadow_lookup.wgsl)
     lateral_taps: u32,     // diffusion: shadow-map taps of the lit surface around the chord
-    lateral_downsample: u32, // > 1: the taps are read from the lateral map at 1/N resolution
-    bounce_layer: u32,     // the lateral map's layer holding the bounce (bounce.wgsl)
+    map_downsample: u32, // > 1: the taps are read from the transmitted map at 1/N resolution
+    bounce_layer: u32,     // the transmitted map's layer holding the bounce (bounce.wgsl)
     bounce_ring: u32,      // cells of each pyramid level between a point and the next; 0 = off
     bounce_cell_mm: f32,   // the finest cells read, profile mm
     _pad2: u32,
@@ -67,7 +67,7 @@ struct Object {
     lut_range_mm: f32,     // thickness range of the T(s) LUT
     eta: f32,              // relative index of refraction of the boundary
     lateral_decay: f32,    // the medium's slowest decay rate, 1/mm (spreads the lateral taps)
-    index: u32,            // in the frame's draw list (lateral.wgsl's surface targets)
+    index: u32,            // in the frame's draw list (transmitted_map.wgsl's surface targets)
     reduced_scattering: vec3<f32>, // sigma_s', 1/mm (isotropic phase)
     // The rough boundary's transmittance against the cosine: coefficients 0-3 and 4-7 of a
     // degree-7 polynomial (transmittance.wgsl, boundary_transmittance).

@@ -22,7 +22,6 @@ macro_rules! lighting_shader {
 pub mod bounce;
 pub mod copy;
 pub mod fullscreen;
-pub mod lateral_map;
 pub mod lighting;
 pub mod maps;
 pub mod overrides;
@@ -34,6 +33,7 @@ pub mod tonemap;
 pub mod traffic;
 pub mod transmittance;
 pub mod transmitted_light;
+pub mod transmitted_map;
 pub mod tsm;
 pub mod util;
 

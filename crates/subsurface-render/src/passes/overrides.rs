@@ -1,5 +1,5 @@
 //! The WGSL overrides that specialize the lighting shader's pipelines (lighting.wgsl,
-//! transmittance.wgsl, lateral.wgsl): one pipeline per value, so that the shader compiler drops
+//! transmittance.wgsl, transmitted_map.wgsl): one pipeline per value, so that the shader compiler drops
 //! the other values' code. Each name is declared here once and read by every pass that builds
 //! on the lighting shader.
 
@@ -9,7 +9,7 @@ use crate::settings::TransmittanceMethod;
 pub const TRANSMITTANCE_METHOD: &str = "TRANSMITTANCE_METHOD";
 /// Fixes where a pipeline's `diffusion` takes its lateral light from
 /// (`frame_plan::LightingVariant::lateral`; 2: the taps per pixel, 3: the taps' sum given by
-/// the texel's lanes in the lateral map's compute evaluation).
+/// the texel's lanes in the transmitted map's compute evaluation).
 pub const LATERAL_SOURCE: &str = "LATERAL_SOURCE";
 /// Fixes where a pipeline's pixels take the bounce from (`frame_plan::LightingVariant::bounce`).
 pub const BOUNCE_SOURCE: &str = "BOUNCE_SOURCE";
@@ -23,12 +23,12 @@ pub const FOLLOW_UNIFORM: u32 = 255;
 pub mod lateral {
     /// No lateral light (another method, or no taps).
     pub const NONE: u32 = 0;
-    /// The lateral map (the lights' chords per pixel only where the map has no texel of the
+    /// The transmitted map (the lights' chords per pixel only where the map has no texel of the
     /// pixel's surface).
     pub const MAP: u32 = 1;
     /// The taps per pixel.
     pub const TAPS: u32 = 2;
-    /// The taps' sum given by the texel's lanes (the lateral map's compute evaluation).
+    /// The taps' sum given by the texel's lanes (the transmitted map's compute evaluation).
     pub const GIVEN: u32 = 3;
 }
 
@@ -37,7 +37,7 @@ pub mod lateral {
 pub mod bounce {
     /// No bounce.
     pub const NONE: u32 = 0;
-    /// The lateral map's bounce layer.
+    /// The transmitted map's bounce layer.
     pub const MAP: u32 = 1;
     /// A gather per pixel (no map).
     pub const GATHER: u32 = 2;
@@ -75,7 +75,7 @@ impl Terms {
 }
 
 /// `diffusion` evaluated whole with `terms`, the lateral taps included (LATERAL_SOURCE 2, or
-/// `lateral` given): the lateral map's passes.
+/// `lateral` given): the transmitted map's passes.
 pub fn diffusion_whole(terms: Terms, lateral: f64) -> [(&'static str, f64); 3] {
     [
         (

@@ -10,12 +10,12 @@
 override TRANSMITTANCE_METHOD: u32 = FOLLOW_UNIFORM;
 
 // Where this pipeline's `diffusion` comes from (frame_plan.rs, `LightingVariant::lateral`): 0 per point
-// without lateral light (another method, or no taps), 1 the lateral map (shade reads every
+// without lateral light (another method, or no taps), 1 the transmitted map (shade reads every
 // light's transmitted light there at once, and runs the chords here, without taps, where the
 // map has no texel of the pixel's surface), 2 per point with the taps (no map, skin too far for the map's texels:
 // the renderer draws it with this variant, gpu_scene.rs `lateral_taps_objects`, and the
-// lateral pass's fragment shader), 3 per point with the taps' sum given in `given_lateral`
-// (the lateral pass's compute shader, lateral.wgsl `cs_transmitted`, which spreads each texel's
+// map pass's fragment shader), 3 per point with the taps' sum given in `given_lateral`
+// (the map pass's compute shader, transmitted_map.wgsl `cs_transmitted`, which spreads each texel's
 // taps over several invocations), 255 per point with the taps (the texture-space pass). A
 // pipeline per source, as for the method: the map's pipeline holds no tap loop, which llvmpipe
 // runs for every pixel once any pixel needs it (7 of the lighting pass's 117 ms at 640x360)
@@ -176,7 +176,7 @@ fn light_entry(light: Light, p: vec3<f32>, n_vertex: vec3<f32>) -> Entry {
     if (!sc.inside) {
         return e;
     }
-    // The lighting pipeline that reads the lateral map runs this only at outline pixels, with
+    // The lighting pipeline that reads the transmitted map runs this only at outline pixels, with
     // one texel: the N x N loop's code cost 0.14 ms of registers at every pixel of that pass on
     // an H100 (docs/lab/performance.md). Written as min(N, 1), not a literal 1: with the literal,
     // Mesa 22.3's lavapipe chose to inline this pipeline's uniforms and compiled a new copy of
@@ -285,7 +285,7 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
 // light over most of a head for nothing (the five-light head on lavapipe: without this bound
 // the march alone added 35 % to the frame; with it, all of `diffusion` adds 6-8 %).
 const SCATTER_STEPS: i32 = 8;
-// The lighting pipeline that reads the lateral map runs `transmittance` only at the pixels the
+// The lighting pipeline that reads the transmitted map runs `transmittance` only at the pixels the
 // map has no texel for (an outline; shade in lighting.wgsl), with this many steps: the code a
 // shader holds costs registers at every pixel of that pipeline on an H100, taken or not
 // (1920x1080, the default scene: its lighting pass 2.80 ms with eight steps, 2.71 with four,
@@ -356,7 +356,7 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     let t2 = cross(l, t1);
     let chord = max(s_mm, 1.0);
     // Loop invariants and recurrences rather than per-tap transcendentals: this loop is most
-    // of the lateral pass (lavapipe, 640x360: 12 taps cost 0.7 ms each, the rest of the pass 8).
+    // of the map pass (lavapipe, 640x360: 12 taps cost 0.7 ms each, the rest of the pass 8).
     let normal_in = 1.0 / boundary_transmittance(1.0);
     let per_tap = 1.0 / (f32(taps) * sigma);
     // The taps turn by the golden angle: (cos, sin) of tap i, rotated once per tap; a stride
@@ -436,7 +436,7 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     return sum;
 }
 
-// How far (profile mm, along the view) a lateral-map texel's surface may lie from the pixel's
+// How far (profile mm, along the view) a transmitted-map texel's surface may lie from the pixel's
 // surface extended as a plane, for the pixel to take its light: a quarter of the kernel's own
 // decay length (0.9 mm for skin1), so the four texels around a pixel on one smooth surface
 // agree, and a sheet in front of another (tests/transmittance.rs: without the test the front
@@ -466,7 +466,7 @@ fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 
     return screen.depth + dot(screen.gradient, centre - screen.xy);
 }
 
-// What the lighting pass's pixel reads from the lateral map: every light's transmitted light,
+// What the lighting pass's pixel reads from the transmitted map: every light's transmitted light,
 // and whether it came from texels of the pixel's own surface.
 struct MapRead {
     t: Transmitted,
@@ -474,7 +474,7 @@ struct MapRead {
 };
 
 // `diffusion`'s transmitted light at `screen`'s pixel, every light's together, interpolated
-// from the map the lateral pass filled at 1/N resolution (fs_transmitted in lighting.wgsl).
+// from the map the map pass filled at 1/N resolution (fs_transmitted in lighting.wgsl).
 // The four map texels around the pixel count with their bilinear weights where their surface
 // lies within the tolerance of the pixel's, extended as a plane to the texel's centre (so a
 // slanted surface keeps its texels and a depth edge loses them). Where they carry too little
@@ -482,7 +482,7 @@ struct MapRead {
 // its depth serves (its diffuse part), marked as not on the pixel's surface (shade then runs
 // the chords there);
 // where none of the 4 x 4 lies near the pixel's depth (a back face of an open mesh, which the
-// lateral pass culls) it is zero, and the chords alone serve.
+// map pass culls) it is zero, and the chords alone serve.
 // The renderer sizes the map for the nearest skin (`lateral_texel_mm` there); skin whose
 // texels come out more than `MAX_TEXEL_FACTOR` times coarser is drawn with a pipeline that
 // evaluates everything per pixel (LATERAL_SOURCE 2).
@@ -494,7 +494,7 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
         return MapRead(out, true);
     }
     let units_per_mm = object.world_per_mm * object.translucency;
-    let size = vec2<i32>(textureDimensions(lateral_map));
+    let size = vec2<i32>(textureDimensions(transmitted_map));
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
     let pos = screen.xy * scale - 0.5;
     let base = vec2<i32>(floor(pos));
@@ -507,14 +507,14 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
             if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
                 continue;
             }
-            let d = textureLoad(lateral_map, texel, 0, 0);
+            let d = textureLoad(transmitted_map, texel, 0, 0);
             let expected = plane_depth(screen, texel, scale);
             let w = select(1.0 - f.x, f.x, i == 1) * select(1.0 - f.y, f.y, j == 1);
             if (d.w <= 0.0 || abs(d.w - expected) > tolerance) {
                 continue;
             }
             out.diffuse += d.rgb * w;
-            out.ballistic += textureLoad(lateral_map, texel, 1, 0).rgb * w;
+            out.ballistic += textureLoad(transmitted_map, texel, 1, 0).rgb * w;
             weight += w;
         }
     }
@@ -531,7 +531,7 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
             if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
                 continue;
             }
-            let d = textureLoad(lateral_map, texel, 0, 0);
+            let d = textureLoad(transmitted_map, texel, 0, 0);
             let gap = abs(d.w - screen.depth);
             if (d.w > 0.0 && gap < nearest.w) {
                 nearest = vec4<f32>(d.rgb, gap);

@@ -262,8 +262,7 @@ impl Renderer {
             &plan,
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
-        let targets =
-            LightingTargets::with_lateral(ctx, options.width(), options.height(), plan.lateral);
+        let targets = LightingTargets::with_map(ctx, options.width(), options.height(), plan.map);
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
         sss.resize(
@@ -424,21 +423,17 @@ impl Renderer {
                 TextureSpacePass::new(&self.ctx, scene, &texture_signature.0, &self.maps_layout)?;
             self.texture_signature = texture_signature;
         }
-        // New targets (and every binding of them) when the size changes; a new lateral map
+        // New targets (and every binding of them) when the size changes; a new transmitted map
         // alone when only its shape does (the camera moved the skin nearer or farther, a
         // shadowed light came or went).
         let resized =
             (options.width(), options.height()) != (self.options.width(), self.options.height());
         if resized {
-            self.targets = LightingTargets::with_lateral(
-                &self.ctx,
-                options.width(),
-                options.height(),
-                plan.lateral,
-            );
+            self.targets =
+                LightingTargets::with_map(&self.ctx, options.width(), options.height(), plan.map);
             self.output = output_texture(&self.ctx, options.width(), options.height());
-        } else if plan.lateral != self.targets.lateral_shape() {
-            self.targets.set_lateral(&self.ctx, plan.lateral);
+        } else if plan.map != self.targets.map_shape() {
+            self.targets.set_map(&self.ctx, plan.map);
         }
         let views = target_views(&self.targets);
         let new_sss = new_profiles || options.settings.sss != self.options.settings.sss;

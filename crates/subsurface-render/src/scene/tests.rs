@@ -298,6 +298,18 @@ fn invalid_render() {
     render("ambient = [0.1, -0.1, 0.0]", "render.ambient[1]");
     render("background = [-1.0, 0.0, 0.0]", "render.background[0]");
     render("width = -5", "render.width");
+    render(
+        "transmitted_map = { texel_mm = 60.0 }",
+        "render.transmitted_map.texel_mm",
+    );
+    // Keys that moved name their new place.
+    let s = format!("{MINIMAL}\n[render.transmittance]\nlateral_texel_mm = 2.0\n");
+    let e = parse(&s).unwrap_err().to_string();
+    assert!(
+        e.contains("render.transmittance.lateral_texel_mm")
+            && e.contains("render.transmitted_map.texel_mm"),
+        "{e}"
+    );
 }
 
 #[test]

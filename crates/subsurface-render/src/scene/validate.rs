@@ -124,10 +124,35 @@ fn medium_error(c: &Check, field: &str, e: &subsurface_profile::ProfileError) ->
     }
 }
 
+/// A `[render]` key that moved is named with its new place before serde refuses it as an
+/// unknown field.
+fn renamed_render_keys(s: &str, name_for_errors: &str) -> Result<(), SceneError> {
+    let Ok(table) = toml::from_str::<toml::Table>(s) else {
+        return Ok(()); // serde names the syntax error
+    };
+    let render = table.get("render").and_then(|r| r.as_table());
+    for (old, _) in crate::settings::RENAMED {
+        let (t, leaf) = old.split_once('.').expect("renamed keys are in a table");
+        let used = render
+            .and_then(|r| r.get(t))
+            .and_then(|t| t.as_table())
+            .is_some_and(|t| t.contains_key(leaf));
+        if let Some(e) = used.then(|| crate::settings::renamed(old)).flatten() {
+            return Err(SceneError::Invalid {
+                file: name_for_errors.to_string(),
+                field: e.field,
+                msg: e.message,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl SceneDesc {
     /// Parses and validates a scene. `name_for_errors` names the file in errors.
     pub fn from_toml_str(s: &str, name_for_errors: &str) -> Result<Self, SceneError> {
         let toml_err = |e| toml_error(s, name_for_errors, e);
+        renamed_render_keys(s, name_for_errors)?;
         let mut desc: SceneDesc = toml::from_str(s).map_err(toml_err)?;
         desc.apply_render_keys(s, name_for_errors)?;
         desc.validate(name_for_errors)?;

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{InvalidSetting, check};
+use super::{InvalidSetting, check, check_int};
 
 /// Largest [`BounceSettings::ring`].
 pub const MAX_BOUNCE_RING: u32 = 8;
@@ -45,12 +45,7 @@ impl BounceSettings {
 
     /// Checks each key's range; the error names the key below `bounce`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
-        if self.ring > MAX_BOUNCE_RING {
-            return Err(InvalidSetting::new(
-                "ring",
-                format!("must be in 0..={MAX_BOUNCE_RING} (got {})", self.ring),
-            ));
-        }
+        check_int("ring", self.ring, 0..=MAX_BOUNCE_RING)?;
         check(
             "cell_mm",
             self.cell_mm,

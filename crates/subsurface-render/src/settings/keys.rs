@@ -46,13 +46,31 @@ pub const SETTINGS: &[SettingDoc] = &[
     doc("transmittance.normal_shrink", "scene units", "inward shift before the shadow lookup"),
     doc("transmittance.thickness_filter", "texels", "odd width averaged for thickness, 1..=15"),
     doc("transmittance.lateral_taps", "taps", "diffusion: lit-surface taps around the chord, 0..=32"),
-    doc("transmittance.lateral_texel_mm", "mm", "diffusion: lateral map texel on the skin, 0..=50 (0: per pixel)"),
-    doc("transmittance.lateral_pass", "", "diffusion: compute or fragment evaluation of the map"),
     doc("transmittance.ballistic", "", "diffusion: unscattered light through thin parts"),
     doc("transmittance.single_scattering", "", "diffusion: light scattered once through thin parts"),
+    doc("transmitted_map.texel_mm", "mm", "diffusion and bounce: map texel on the skin, 0..=50 (0: per pixel)"),
+    doc("transmitted_map.pass", "", "diffusion and bounce: compute or fragment evaluation of the map"),
     doc("bounce.ring", "cells", "light between parts: cells read per level, 0..=8 (0: off)"),
     doc("bounce.cell_mm", "mm", "light between parts: finest cell width, 0.1..=50"),
 ];
+
+/// Keys that moved, with their new place: a scene file or `--set` that uses the old key gets
+/// an error naming the new one.
+pub const RENAMED: &[(&str, &str)] = &[
+    ("transmittance.lateral_texel_mm", "transmitted_map.texel_mm"),
+    ("transmittance.lateral_pass", "transmitted_map.pass"),
+];
+
+/// The error for a key that moved ([`RENAMED`]), if `key` (below `[render]`) is one.
+pub fn renamed(key: &str) -> Option<InvalidSetting> {
+    let key = relative(key);
+    RENAMED.iter().find(|(old, _)| *old == key).map(|(_, new)| {
+        InvalidSetting::new(
+            format!("render.{key}"),
+            format!("this key is now render.{new}"),
+        )
+    })
+}
 
 /// `key` below `[render]` (a leading `render.` is dropped).
 fn relative(key: &str) -> &str {
@@ -157,6 +175,9 @@ impl RenderSettings {
     /// must still be of the key's type.
     pub fn set_unchecked(&mut self, key: &str, value: &str) -> Result<(), InvalidSetting> {
         let rel = relative(key);
+        if let Some(e) = renamed(rel) {
+            return Err(e);
+        }
         if !SETTINGS.iter().any(|s| s.key == rel) {
             let table = rel.rsplit_once('.').map_or("", |(t, _)| t);
             let mut valid: Vec<&str> = SETTINGS
@@ -168,7 +189,7 @@ impl RenderSettings {
                 })
                 .collect();
             if table.is_empty() {
-                valid.extend(["sss.*", "transmittance.*", "bounce.*"]);
+                valid.extend(["sss.*", "transmittance.*", "transmitted_map.*", "bounce.*"]);
             }
             let under = if table.is_empty() {
                 "render".to_string()
@@ -178,7 +199,7 @@ impl RenderSettings {
             return Err(InvalidSetting::new(
                 format!("render.{rel}"),
                 if valid.is_empty() {
-                    "unknown key; the tables are render, render.sss, render.transmittance and render.bounce"
+                    "unknown key; the tables are render, render.sss, render.transmittance, render.transmitted_map and render.bounce"
                         .to_string()
                 } else {
                     format!("unknown key; the keys of {under} are {}", valid.join(", "))
@@ -211,7 +232,7 @@ impl RenderSettings {
     }
 
     /// Whether `key` changes the frame with the other settings as they are: the separable
-    /// kernel's taps only matter to `separable`, the lateral map only to `diffusion`, the
+    /// kernel's taps only matter to `separable`, the transmitted map only to `diffusion`, the
     /// bounce's cells only with a ring. Conservative: true where unsure.
     pub fn matters(&self, key: &str) -> bool {
         let (sss, t) = (self.sss.method, self.transmittance.method);
@@ -221,7 +242,10 @@ impl RenderSettings {
             "sss.source_shift" => sss != SssMethod::None,
             "sss.min_sigma_px" | "sss.gaussians" => sss == SssMethod::Gaussian6,
             k if k.starts_with("sss.texture_") => sss == SssMethod::Texture,
-            k if k.starts_with("transmittance.lateral_") => t == TransmittanceMethod::Diffusion,
+            "transmittance.lateral_taps" => t == TransmittanceMethod::Diffusion,
+            k if k.starts_with("transmitted_map.") => {
+                t == TransmittanceMethod::Diffusion && self.transmittance.lateral_taps > 0
+            }
             "transmittance.ballistic" | "transmittance.single_scattering" => {
                 t == TransmittanceMethod::Diffusion
             }
@@ -282,6 +306,11 @@ mod tests {
                 "render.colour: unknown key; the keys of render are quality, width, height,",
             ),
             ("sss.samples", "4", "render.sss.samples: must be odd"),
+            (
+                "transmittance.lateral_texel_mm",
+                "2",
+                "render.transmittance.lateral_texel_mm: this key is now render.transmitted_map.texel_mm",
+            ),
             ("sss.samples", "abc", "render.sss.samples: "),
             ("sss.method", "blurry", "render.sss.method: "),
             ("exposure_ev", "nan", "render.exposure_ev: must be finite"),

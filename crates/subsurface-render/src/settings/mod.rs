@@ -7,14 +7,16 @@ mod keys;
 mod quality;
 mod sss;
 mod transmittance;
+mod transmitted_map;
 
 pub use bounce::{BounceSettings, MAX_BOUNCE_RING};
-pub use keys::{SETTINGS, SettingDoc, value_text};
+pub use keys::{RENAMED, SETTINGS, SettingDoc, renamed, value_text};
 pub use quality::Quality;
 pub use sss::{SssFetch, SssMethod, SssSettings};
-pub use transmittance::{
-    DEFAULT_LATERAL_TEXEL_MM, LateralPass, MAX_LATERAL_DOWNSAMPLE, MAX_TEXEL_FACTOR,
-    TransmittanceMethod, TransmittanceSettings, lateral_downsample,
+pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
+pub use transmitted_map::{
+    DEFAULT_MAP_TEXEL_MM, MAX_MAP_DOWNSAMPLE, MAX_TEXEL_FACTOR, MapEvaluation,
+    TransmittedMapSettings, map_downsample,
 };
 
 use serde::{Deserialize, Serialize};
@@ -48,7 +50,7 @@ method_names!(
     SssMethod,
     SssFetch,
     TransmittanceMethod,
-    LateralPass,
+    MapEvaluation,
     Quality
 );
 
@@ -98,6 +100,22 @@ pub(crate) fn check(field: &str, x: f32, ok: bool, rule: &str) -> Result<(), Inv
     }
 }
 
+/// `v` within `range` (an integer setting).
+pub(crate) fn check_int(
+    field: &str,
+    v: u32,
+    range: std::ops::RangeInclusive<u32>,
+) -> Result<(), InvalidSetting> {
+    if range.contains(&v) {
+        Ok(())
+    } else {
+        Err(InvalidSetting::new(
+            field,
+            format!("must be in {}..={} (got {v})", range.start(), range.end()),
+        ))
+    }
+}
+
 /// Largest image side accepted before the device's own limit is known.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Exposure beyond this many stops saturates or blackens every pixel of a half-float target.
@@ -129,6 +147,9 @@ pub struct RenderSettings {
     pub sss: SssSettings,
     /// Light through thin parts (`[render.transmittance]`).
     pub transmittance: TransmittanceSettings,
+    /// Where `diffusion`'s transmitted light and the bounce are evaluated
+    /// (`[render.transmitted_map]`).
+    pub transmitted_map: TransmittedMapSettings,
     /// Light between lit parts across the air (`[render.bounce]`).
     pub bounce: BounceSettings,
 }
@@ -152,6 +173,7 @@ impl RenderSettings {
             background: [0.02, 0.02, 0.025],
             sss: SssSettings::default(),
             transmittance: TransmittanceSettings::default(),
+            transmitted_map: TransmittedMapSettings::default(),
             bounce: BounceSettings::default(),
         }
     }
@@ -189,12 +211,7 @@ impl RenderSettings {
     /// Checks every value; the error names the field below `[render]`.
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         for (field, v) in [("width", self.width), ("height", self.height)] {
-            if !(1..=MAX_IMAGE_SIDE).contains(&v) {
-                return Err(InvalidSetting::new(
-                    field,
-                    format!("must be in 1..={MAX_IMAGE_SIDE} (got {v})"),
-                ));
-            }
+            check_int(field, v, 1..=MAX_IMAGE_SIDE)?;
         }
         check(
             "exposure_ev",
@@ -211,6 +228,9 @@ impl RenderSettings {
         self.transmittance
             .validate()
             .map_err(|e| e.under("transmittance"))?;
+        self.transmitted_map
+            .validate()
+            .map_err(|e| e.under("transmitted_map"))?;
         self.bounce.validate().map_err(|e| e.under("bounce"))
     }
 }

@@ -8,10 +8,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Quality {
-    /// A few jittered taps and `diffusion`'s chord at each pixel: no lateral map, no bounce.
+    /// A few jittered taps and `diffusion`'s chord at each pixel: no transmitted map, no bounce.
     Low,
-    /// The default: a few jittered taps and `diffusion`'s transmitted light on its lateral
-    /// map; no bounce.
+    /// The default: a few jittered taps and `diffusion`'s transmitted light on its
+    /// transmitted map; no bounce.
     #[default]
     Medium,
     /// Every term: the renderer's closest match to the path tracer.

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 use subsurface_profile::DEFAULT_SAMPLES;
 
-use super::{InvalidSetting, check};
+use super::{InvalidSetting, check, check_int};
 
 /// Which subsurface-scattering method runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -168,18 +168,8 @@ impl SssSettings {
             self.min_sigma_px >= 0.0,
             ">= 0",
         )?;
-        if !(16..=16384).contains(&self.texture_size) {
-            return Err(InvalidSetting::new(
-                "texture_size",
-                format!("must be in 16..=16384 (got {})", self.texture_size),
-            ));
-        }
-        if self.texture_padding > 16 {
-            return Err(InvalidSetting::new(
-                "texture_padding",
-                format!("must be in 0..=16 (got {})", self.texture_padding),
-            ));
-        }
+        check_int("texture_size", self.texture_size, 16..=16384)?;
+        check_int("texture_padding", self.texture_padding, 0..=16)?;
         check(
             "texture_albedo_pre",
             self.texture_albedo_pre,

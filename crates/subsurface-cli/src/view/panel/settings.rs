@@ -1,60 +1,43 @@
 //! The render-settings sections: Subsurface scattering, Transmittance, Image and Compare
-//! (the split screen's second side). Each holds its method pickers and the generated rows
-//! (`generated`) of the keys that change the frame; "All settings" lists every key.
+//! (the split screen's second side). Each holds the generated rows (`generated`) of its
+//! methods and of the keys that change the frame; "All settings" lists every key.
 
 use egui::{Slider, Ui};
-use subsurface_render::{RenderSettings, SssMethod, TransmittanceMethod};
+use subsurface_render::{RenderSettings, SssMethod};
 
 use super::generated;
-use super::widgets::{combo, labelled, settings_section, view_combo};
+use super::widgets::{labelled, settings_section, view_combo};
 use crate::view::model::Model;
 use crate::view::state::{Which, per_side};
 
-fn method_combo(ui: &mut Ui, id: &str, method: &mut SssMethod) -> bool {
-    labelled(ui, "method", |ui| {
-        combo(ui, id, method, SssMethod::ALL, SssMethod::name)
-    })
-}
-
-fn transmittance_combo(ui: &mut Ui, id: &str, t: &mut TransmittanceMethod) -> bool {
-    labelled(ui, "transmittance", |ui| {
-        combo(
-            ui,
-            id,
-            t,
-            TransmittanceMethod::ALL,
-            TransmittanceMethod::name,
-        )
-    })
-}
-
-/// A side's keys below `table` (but its method, picked above them) that change the frame.
+/// The keys below `table` that change the frame, its method first (the table's order).
 fn effect_keys(table: &'static str) -> impl Fn(&str, &RenderSettings) -> bool {
     move |key, s| {
-        key.strip_prefix(table)
-            .is_some_and(|k| k.starts_with('.') && k != ".method")
-            && s.matters(key)
+        key.strip_prefix(table).is_some_and(|k| k.starts_with('.'))
+            && (key.ends_with(".method") || s.matters(key))
     }
 }
 
 pub fn sss(ui: &mut Ui, m: &mut Model) {
     settings_section(ui, "Subsurface scattering", m, |ui, m| {
-        let changed = method_combo(ui, "a method", &mut m.state.a.sss.method);
         generated::rows(ui, m, Which::A, "sss.", effect_keys("sss"));
-        changed
+        false
     });
 }
 
 pub fn transmittance(ui: &mut Ui, m: &mut Model) {
     settings_section(ui, "Transmittance", m, |ui, m| {
-        let changed =
-            transmittance_combo(ui, "a transmittance", &mut m.state.a.transmittance.method);
-        let (t, b) = (effect_keys("transmittance"), effect_keys("bounce"));
-        // `bounce.*` is the scene's (`[render.bounce]`): both sides of a split screen share it.
+        let effects = [
+            effect_keys("transmittance"),
+            effect_keys("transmitted_map"),
+            effect_keys("bounce"),
+        ];
+        // `transmitted_map.*` and `bounce.*` are the scene's: both sides of a split screen
+        // share them.
         generated::rows(ui, m, Which::A, "transmittance.", move |k, s| {
-            t(k, s) || b(k, s)
+            effects.iter().any(|e| e(k, s))
         });
-        changed
+        false
     });
 }
 
@@ -94,13 +77,12 @@ pub fn compare(ui: &mut Ui, m: &mut Model) {
             }
         });
         if m.state.compare {
-            let b = &mut m.state.b;
-            changed |= method_combo(ui, "b method", &mut b.sss.method);
-            changed |= transmittance_combo(ui, "b transmittance", &mut b.transmittance.method);
-            changed |= labelled(ui, "debug view", |ui| view_combo(ui, "b view", &mut b.view));
-            // The right side's own keys; the scene's are shared with the left.
+            changed |= labelled(ui, "debug view", |ui| {
+                view_combo(ui, "b view", &mut m.state.b.view)
+            });
+            // The right side's own keys, methods first; the scene's are shared with the left.
             generated::rows(ui, m, Which::B, "", |k, s| {
-                per_side(k) && !k.ends_with(".method") && s.matters(k)
+                per_side(k) && (k.ends_with(".method") || s.matters(k))
             });
             ui.add(Slider::new(&mut m.state.split, 0.0..=1.0).text("divider"));
         }

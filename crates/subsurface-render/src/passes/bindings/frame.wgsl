@@ -1,5 +1,5 @@
 // Group 0 of the lighting shader's pipelines (lighting/mod.rs, `frame_layout`): what every
-// object of the frame is lit with. Prepended to the lighting pass, the lateral map's passes,
+// object of the frame is lit with. Prepended to the lighting pass, the transmitted map's passes,
 // the texture-space irradiance and the transmitted light pass.
 
 @group(0) @binding(0) var<uniform> camera: Camera;

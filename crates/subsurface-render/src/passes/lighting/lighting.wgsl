@@ -110,11 +110,11 @@ struct TextureSpace {
 @group(2) @binding(2) var ts_widest: texture_2d<f32>;
 @group(2) @binding(3) var ts_sampler: sampler;
 
-// `diffusion`'s transmitted light at reduced resolution (lateral_map/targets.rs, `LateralTargets`):
+// `diffusion`'s transmitted light at reduced resolution (transmitted_map/targets.rs, `TransmittedMapTargets`):
 // layer 0 its diffuse part, layer 1 its unscattered and singly scattered part, every light's
 // radiance summed, a = the texel's view depth (0: nothing there); the bounce's layer after
-// them. Group 3 of the lighting pass; the lateral and bounce passes have no group 3.
-@group(3) @binding(0) var lateral_map: texture_2d_array<f32>;
+// them. Group 3 of the lighting pass; the map and bounce passes have no group 3.
+@group(3) @binding(0) var transmitted_map: texture_2d_array<f32>;
 
 fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
     let n = normalize(in.normal);
@@ -162,7 +162,7 @@ fn light_radiance(light: Light, world: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
 // `screen`: where `world` is the pixel's surface, `diffusion` may read its transmitted light
-// from the lateral map (transmittance.wgsl, transmitted_from_map).
+// from the transmitted map (transmittance.wgsl, transmitted_from_map).
 fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f32, rho_s: f32, with_tsm: bool, screen: ScreenSample) -> Shading {
     var s: Shading;
     s.irradiance = vec3<f32>(0.0);
@@ -172,7 +172,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     let count = min(lights.count, MAX_LIGHTS);
     // Translucent shadow maps are method 4's: a pipeline built for another leaves them out.
     let tsm = with_tsm && (TRANSMITTANCE_METHOD == FOLLOW_UNIFORM || TRANSMITTANCE_METHOD == TRANSMITTANCE_TSM);
-    // `diffusion` from the lateral map: where the map holds the pixel's surface, one read
+    // `diffusion` from the transmitted map: where the map holds the pixel's surface, one read
     // serves every light. Where it does not (an outline, whose outer pixels no texel centre
     // covers; a depth edge), each light's chord runs here (`transmittance`, without taps) and
     // the diffuse part becomes the larger of their sum and the nearest texel's: the grazing
@@ -243,7 +243,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     let m = object.roughness;
     let v = normalize(camera.position - in.world);
     let ts = texture_space.params;
-    // In uniform control flow: the derivatives extend the pixel's surface to the lateral map's
+    // In uniform control flow: the derivatives extend the pixel's surface to the transmitted map's
     // texels around it.
     let depth = dot(in.world - camera.position, camera.forward);
     let screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));

@@ -6,39 +6,39 @@
 //! diffuse and specular apart (only diffuse is blurred by subsurface scattering), linear depth
 //! and the per-pixel SSS strength.
 //!
-//! Where the frame plan has a lateral map, its passes ([`crate::passes::lateral_map`]) run
+//! Where the frame plan has a transmitted map, its passes ([`crate::passes::transmitted_map`]) run
 //! first and the lighting pass reads `diffusion`'s transmitted light and the bounce from it
 //! once per pixel, with a pipeline that holds no taps of its own.
 //!
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps, flux pyramid; declared in
 //! bindings/frame.wgsl) is built by [`frame_layout`]; group 1 is the object's
 //! (`gpu::object::object_layout`, bindings/object.wgsl), group 2 the
-//! object's texture-space maps ([`maps::maps_layout`]), group 3 the lateral map
+//! object's texture-space maps ([`maps::maps_layout`]), group 3 the transmitted map
 //! ([`screen_layout`]). The texture-space pass draws its UV-space irradiance with the same
-//! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_lateral_map`].
+//! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_transmitted_map`].
 
 mod targets;
 
 pub use targets::{DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout};
-use targets::{dummy_lateral_map, screen_bind_group};
+use targets::{dummy_transmitted_map, screen_bind_group};
 
 use wgpu::util::DeviceExt;
 
 use crate::frame_plan::{FramePlan, LightingVariant};
 use crate::gpu::GpuContext;
 use crate::gpu::object::GpuObject;
-use crate::passes::lateral_map::LateralMapPass;
 use crate::passes::maps;
 use crate::passes::overrides::{
     BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, lateral,
 };
+use crate::passes::transmitted_map::TransmittedMapPass;
 use crate::passes::util;
 use crate::timing::TimedPass;
 use crate::uniforms::{CameraUniform, LightsUniform};
 
 /// The lighting shader's WGSL: common declarations, lighting.wgsl and the shadow, transmittance,
-/// bounce and lateral-map code it calls.
-pub const SHADER: &str = lighting_shader!(include_str!("../lateral_map/lateral.wgsl"));
+/// bounce and transmitted-map code it calls.
+pub const SHADER: &str = lighting_shader!(include_str!("../transmitted_map/transmitted_map.wgsl"));
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
 /// `shadow_depth` and `shadow_compare` in lighting.wgsl, `flux_position`, `flux_normal` and
@@ -46,7 +46,7 @@ pub const SHADER: &str = lighting_shader!(include_str!("../lateral_map/lateral.w
 /// so other pipelines built on the lighting shader (the texture-space irradiance) may bind
 /// [`LightingPass::frame_bind_group`].
 pub fn frame_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    // Compute too: the lateral map's evaluation (lateral.wgsl, `cs_transmitted`) reads the
+    // Compute too: the transmitted map's evaluation (transmitted_map.wgsl, `cs_transmitted`) reads the
     // camera, the lights and the shadow maps.
     let stages = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let uniform = |binding| util::uniform_entry(binding, wgpu::ShaderStages::VERTEX | stages);
@@ -167,17 +167,17 @@ pub struct LightingPass {
     pipelines: Vec<(LightingVariant, wgpu::RenderPipeline)>,
     /// The index in `pipelines` of the plan's variant.
     current: usize,
-    /// Where `current` reads the lateral map: the index in `pipelines` of its variant that
+    /// Where `current` reads the transmitted map: the index in `pipelines` of its variant that
     /// gathers the taps at each pixel instead, for the objects `taps_objects` marks (skin too
     /// far for the map's texels, the plan's `taps_objects`).
     taps: Option<usize>,
     taps_objects: Vec<bool>,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    /// The lateral map's passes, on the same shader and groups.
-    lateral: LateralMapPass,
+    /// The transmitted map's passes, on the same shader and groups.
+    map: TransmittedMapPass,
     /// Group 3 for pipelines that take the screen layout but never read the map.
-    no_lateral_map: wgpu::BindGroup,
+    no_transmitted_map: wgpu::BindGroup,
     frame_bind_group: wgpu::BindGroup,
     /// Group 2 for objects without texture-space maps.
     default_maps: wgpu::BindGroup,
@@ -250,7 +250,7 @@ impl LightingPass {
                 &screen_layout(device),
             ],
         );
-        let lateral = LateralMapPass::new(
+        let map = TransmittedMapPass::new(
             device,
             &module,
             [&frame_layout, object_layout, maps_layout],
@@ -270,8 +270,8 @@ impl LightingPass {
             current: 0,
             module,
             layout,
-            lateral,
-            no_lateral_map: screen_bind_group(device, &dummy_lateral_map(device)),
+            map,
+            no_transmitted_map: screen_bind_group(device, &dummy_transmitted_map(device)),
             default_maps,
             frame_bind_group,
             camera,
@@ -286,10 +286,10 @@ impl LightingPass {
         &self.frame_bind_group
     }
 
-    /// Group 3 (see [`screen_layout`]) without a lateral map, for pipelines on the lighting
+    /// Group 3 (see [`screen_layout`]) without a transmitted map, for pipelines on the lighting
     /// shader that never read it.
-    pub fn no_lateral_map(&self) -> &wgpu::BindGroup {
-        &self.no_lateral_map
+    pub fn no_transmitted_map(&self) -> &wgpu::BindGroup {
+        &self.no_transmitted_map
     }
 
     /// Writes the per-frame uniforms (the camera and the lights) and takes `plan`'s pipelines,
@@ -307,7 +307,7 @@ impl LightingPass {
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.current = self.pipeline_index(&ctx.device, plan.lighting);
         self.set_taps_objects(&ctx.device, plan);
-        self.lateral.prepare(&ctx.device, plan);
+        self.map.prepare(&ctx.device, plan);
     }
 
     /// The index in `pipelines` of `key`'s pipeline, built the first time it is asked for.
@@ -323,7 +323,7 @@ impl LightingPass {
     }
 
     /// The objects (`objects[i]` of [`Self::encode_with_maps`]) that gather `diffusion`'s
-    /// lateral taps at each pixel although the frame reads them from the lateral map (the
+    /// lateral taps at each pixel although the frame reads them from the transmitted map (the
     /// plan's `taps_objects`: skin whose texels would be too coarse), with their pipeline
     /// built the first time. Ignored where the current variant reads no map.
     fn set_taps_objects(&mut self, device: &wgpu::Device, plan: &FramePlan) {
@@ -399,7 +399,7 @@ impl LightingPass {
         timer.end(profiler, encoder);
     }
 
-    /// The lateral map's passes where the plan has them, the depth pre-pass and the lighting
+    /// The transmitted map's passes where the plan has them, the depth pre-pass and the lighting
     /// pass into `targets`, with each object's texture-space bind group (`maps[i]` for
     /// `objects[i]`; objects beyond `maps` are lit plainly).
     #[allow(clippy::too_many_arguments)]
@@ -413,12 +413,12 @@ impl LightingPass {
         far: f32,
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        if let Some(lateral) = &targets.lateral
-            && self.lateral.runs()
+        if let Some(map) = &targets.map
+            && self.map.runs()
         {
-            self.lateral.encode(
+            self.map.encode(
                 encoder,
-                lateral,
+                map,
                 &self.frame_bind_group,
                 objects,
                 maps,

@@ -1,9 +1,9 @@
 //! The lighting pass's targets (what it writes and screen-space SSS reads) and its group 3:
-//! the lateral map it reads, or a stand-in.
+//! the transmitted map it reads, or a stand-in.
 
-use crate::frame_plan::{LateralShape, TRANSMITTED_LAYERS};
+use crate::frame_plan::{TRANSMITTED_LAYERS, TransmittedMapShape};
 use crate::gpu::GpuContext;
-use crate::passes::lateral_map::{LATERAL_FORMAT, LateralTargets};
+use crate::passes::transmitted_map::{TRANSMITTED_MAP_FORMAT, TransmittedMapTargets};
 use crate::passes::util;
 
 /// Texel format of the diffuse and specular radiance targets: linear HDR.
@@ -30,16 +30,16 @@ pub struct LightingTargets {
     /// r = SSS strength (0 = not skin), g = scene units per profile millimetre.
     pub sss: wgpu::Texture,
     pub(super) zbuffer: wgpu::TextureView,
-    /// `diffusion`'s lateral light at reduced resolution, when the targets were made with a
-    /// `lateral_downsample` above 1.
-    pub lateral: Option<LateralTargets>,
-    /// Group 3 of the lighting pass ([`screen_layout`]): the lateral map, or a 1x1 stand-in.
+    /// `diffusion`'s transmitted light and the bounce at reduced resolution, when the targets were made with a
+    /// `map_downsample` above 1.
+    pub map: Option<TransmittedMapTargets>,
+    /// Group 3 of the lighting pass ([`screen_layout`]): the transmitted map, or a 1x1 stand-in.
     pub(super) screen: wgpu::BindGroup,
 }
 
-/// Layout of group 3 of the lighting pass (`lateral_map` in lighting.wgsl). Pipelines built on
+/// Layout of group 3 of the lighting pass (`transmitted_map` in lighting.wgsl). Pipelines built on
 /// the lighting shader that do not read the map (the texture-space irradiance) take the same
-/// layout and bind `LightingPass::no_lateral_map`.
+/// layout and bind `LightingPass::no_transmitted_map`.
 pub fn screen_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lighting screen"),
@@ -65,28 +65,28 @@ pub(super) fn screen_bind_group(device: &wgpu::Device, map: &wgpu::Texture) -> w
     )
 }
 
-pub(super) fn dummy_lateral_map(device: &wgpu::Device) -> wgpu::Texture {
+pub(super) fn dummy_transmitted_map(device: &wgpu::Device) -> wgpu::Texture {
     util::texture_2d(
         device,
-        "no lateral map",
+        "no transmitted map",
         1,
         1,
         1,
-        LATERAL_FORMAT,
+        TRANSMITTED_MAP_FORMAT,
         wgpu::TextureUsages::TEXTURE_BINDING,
     )
 }
 
 impl LightingTargets {
-    /// Without a lateral map: `diffusion` runs its lateral taps at every pixel.
+    /// Without a transmitted map: `diffusion` runs its lateral taps at every pixel.
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
-        Self::with_lateral(ctx, width, height, LateralShape::NONE)
+        Self::with_map(ctx, width, height, TransmittedMapShape::NONE)
     }
 
-    /// With `diffusion`'s lateral map of `lateral`'s shape (none for a reduction of 1).
-    pub fn with_lateral(ctx: &GpuContext, width: u32, height: u32, lateral: LateralShape) -> Self {
+    /// With `diffusion`'s transmitted map of `map`'s shape (none for a reduction of 1).
+    pub fn with_map(ctx: &GpuContext, width: u32, height: u32, map: TransmittedMapShape) -> Self {
         let device = &ctx.device;
-        let (lateral, screen) = lateral_targets(ctx, width, height, lateral);
+        let (map, screen) = map_targets(ctx, width, height, map);
         let target = |label, format| util::render_target(device, label, width, height, format);
         Self {
             width,
@@ -109,55 +109,55 @@ impl LightingTargets {
             depth: target("linear depth", DEPTH_FORMAT),
             sss: target("sss strength", SSS_FORMAT),
             zbuffer: util::depth_buffer(device, "z-buffer", width, height),
-            lateral,
+            map,
             screen,
         }
     }
 
-    /// The lateral map's reduction (1 without one).
-    pub fn lateral_downsample(&self) -> u32 {
-        self.lateral.as_ref().map_or(1, |l| l.downsample)
+    /// The transmitted map's reduction (1 without one).
+    pub fn map_downsample(&self) -> u32 {
+        self.map.as_ref().map_or(1, |l| l.downsample)
     }
 
-    /// Where the lateral map holds the transmitted light: whether a compute shader evaluates
-    /// it (`LateralPass::Compute` on an adapter that runs it) rather than the map's fragment
+    /// Where the transmitted map holds the transmitted light: whether a compute shader evaluates
+    /// it (`MapEvaluation::Compute` on an adapter that runs it) rather than the map's fragment
     /// shader. None without such a map.
-    pub fn lateral_computed(&self) -> Option<bool> {
-        self.lateral
+    pub fn map_computed(&self) -> Option<bool> {
+        self.map
             .as_ref()
             .filter(|l| l.layer_count >= TRANSMITTED_LAYERS)
-            .map(LateralTargets::computed)
+            .map(TransmittedMapTargets::computed)
     }
 
-    /// The shape of the lateral map these targets hold.
-    pub fn lateral_shape(&self) -> LateralShape {
-        self.lateral
+    /// The shape of the transmitted map these targets hold.
+    pub fn map_shape(&self) -> TransmittedMapShape {
+        self.map
             .as_ref()
-            .map_or(LateralShape::NONE, LateralTargets::shape)
+            .map_or(TransmittedMapShape::NONE, TransmittedMapTargets::shape)
     }
 
-    /// A new lateral map of `lateral`'s shape, the other targets kept: the reduction follows
+    /// A new transmitted map of `map`'s shape, the other targets kept: the reduction follows
     /// the skin's size on screen, so a camera moving nearer changes it without a new frame
     /// size, and a light added to the scene may need a layer more.
-    pub fn set_lateral(&mut self, ctx: &GpuContext, lateral: LateralShape) {
-        (self.lateral, self.screen) = lateral_targets(ctx, self.width, self.height, lateral);
+    pub fn set_map(&mut self, ctx: &GpuContext, map: TransmittedMapShape) {
+        (self.map, self.screen) = map_targets(ctx, self.width, self.height, map);
     }
 }
 
-/// The lateral map of a `width` x `height` frame of `shape` (none for a reduction of 1) and
+/// The transmitted map of a `width` x `height` frame of `shape` (none for a reduction of 1) and
 /// the lighting pass's group 3 that reads it (a 1x1 stand-in without one).
-fn lateral_targets(
+fn map_targets(
     ctx: &GpuContext,
     width: u32,
     height: u32,
-    shape: LateralShape,
-) -> (Option<LateralTargets>, wgpu::BindGroup) {
+    shape: TransmittedMapShape,
+) -> (Option<TransmittedMapTargets>, wgpu::BindGroup) {
     let device = &ctx.device;
-    let lateral = (shape.downsample > 1 && shape.layers > 0)
-        .then(|| LateralTargets::new(ctx, width, height, shape));
-    let screen = match &lateral {
+    let map = (shape.downsample > 1 && shape.layers > 0)
+        .then(|| TransmittedMapTargets::new(ctx, width, height, shape));
+    let screen = match &map {
         Some(l) => screen_bind_group(device, &l.map),
-        None => screen_bind_group(device, &dummy_lateral_map(device)),
+        None => screen_bind_group(device, &dummy_transmitted_map(device)),
     };
-    (lateral, screen)
+    (map, screen)
 }

@@ -6,7 +6,7 @@
 //! The shader is the lighting pass's (common.wgsl, lighting.wgsl, shadow_lookup.wgsl,
 //! transmittance.wgsl, bounce.wgsl) with irradiance.wgsl appended, and the pipeline takes the lighting
 //! pass's bind groups: its frame bind group (group 0), the object's (group 1), the object's
-//! maps (group 2) and, in group 3, no lateral map (texels of a UV map are no pixels of it:
+//! maps (group 2) and, in group 3, no transmitted map (texels of a UV map are no pixels of it:
 //! the lateral taps run per texel).
 
 use crate::gpu_scene::{self, GpuObject};
@@ -86,7 +86,7 @@ impl IrradiancePass {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, lighting.frame_bind_group(), &[]);
             pass.set_bind_group(2, maps, &[]);
-            pass.set_bind_group(3, lighting.no_lateral_map(), &[]);
+            pass.set_bind_group(3, lighting.no_transmitted_map(), &[]);
             object.draw(&mut pass);
         }
         timer.end(profiler, encoder);

@@ -36,7 +36,7 @@ fn fs_irradiance(in: LitVarying) -> IrradianceOut {
     if (object.has_albedo_map != 0u) {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
     }
-    // Texels of a UV map are no pixels of the lateral map: the taps run here.
+    // Texels of a UV map are no pixels of the transmitted map: the taps run here.
     let screen = ScreenSample(vec2<f32>(0.0), 0.0, vec2<f32>(0.0));
     let s = shade(in.world, n, n_vertex, n_vertex, 1.0, 0.0, false, screen);
     var out: IrradianceOut;

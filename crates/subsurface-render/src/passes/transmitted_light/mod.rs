@@ -18,7 +18,7 @@
 //! send across the air, gathered per pixel from a [`crate::passes::bounce::FluxPyramid`] built
 //! on the skin's shadow maps (given to group 0 as [`crate::passes::lighting::ShadowMaps::flux`];
 //! the `LightsUniform`'s `bounce_ring` and `bounce_cell_mm` set). `diffusion`'s lateral taps
-//! run per pixel here too (the lateral map, a lower-rate evaluation, is our renderer's).
+//! run per pixel here too (the transmitted map, a lower-rate evaluation, is our renderer's).
 
 use glam::Mat4;
 use wgpu::util::DeviceExt;

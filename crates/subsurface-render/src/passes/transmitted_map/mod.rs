@@ -1,18 +1,18 @@
-//! The lateral map: `diffusion`'s transmitted light, every light summed, and the bounce,
+//! The transmitted map: `diffusion`'s transmitted light, every light summed, and the bounce,
 //! evaluated at a reduced resolution on the meshes' front faces so that the lighting pass
 //! reads them once per pixel (transmittance.wgsl, `transmitted_from_map`; lighting.wgsl,
-//! `bounce_from_map`). The frame plan decides its shape ([`crate::frame_plan::LateralShape`]).
+//! `bounce_from_map`). The frame plan decides its shape ([`crate::frame_plan::TransmittedMapShape`]).
 //!
-//! By default (`LateralPass::Compute`) a raster pass only records each texel's surface
+//! By default (`MapEvaluation::Compute`) a raster pass only records each texel's surface
 //! (`fs_surface`) and compute shaders evaluate it, once per object over the object's box on
-//! screen (`cs_transmitted`, `cs_bounce`, lateral.wgsl); otherwise the map's fragment shaders
+//! screen (`cs_transmitted`, `cs_bounce`, transmitted_map.wgsl); otherwise the map's fragment shaders
 //! do (`fs_transmitted`, `fs_bounce`). Its pipelines are built on the lighting shader and bind
 //! the lighting pass's groups 0 to 2.
 
 mod targets;
 
-pub use targets::{LATERAL_FORMAT, LateralTargets};
-use targets::{LateralSurface, ObjectRects, dispatch_origin_layout, lateral_compute_layout};
+use targets::{MapSurface, ObjectRects, dispatch_origin_layout, map_compute_layout};
+pub use targets::{TRANSMITTED_MAP_FORMAT, TransmittedMapTargets};
 
 use crate::frame_plan::{FramePlan, TRANSMITTED_LAYERS};
 use crate::gpu::object::GpuObject;
@@ -20,7 +20,7 @@ use crate::passes::overrides::{Terms, diffusion_whole, lateral};
 use crate::passes::util;
 use crate::timing::TimedPass;
 
-/// One raster pass at the lateral map's resolution: `pipeline` into `targets` (layers of the
+/// One raster pass at the transmitted map's resolution: `pipeline` into `targets` (layers of the
 /// map, or the texels' surfaces), timed as `timed`, the first of a frame clearing the map's
 /// z-buffer (the later ones shade only the surfaces it kept).
 struct MapPass<'a> {
@@ -30,7 +30,7 @@ struct MapPass<'a> {
     pipeline: &'a wgpu::RenderPipeline,
 }
 
-/// One compute pass of [`LateralMapPass::encode_compute`]: `pipeline` (spread over lanes, a
+/// One compute pass of [`TransmittedMapPass::encode_compute`]: `pipeline` (spread over lanes, a
 /// workgroup per [`SPREAD_BLOCK`]) once per object, after `clear` over the whole map where
 /// given.
 struct Compute<'a> {
@@ -38,7 +38,7 @@ struct Compute<'a> {
     clear: Option<&'a wgpu::ComputePipeline>,
     pipeline: &'a wgpu::ComputePipeline,
     /// The texels' surfaces it evaluates, and the map it writes.
-    surface: &'a LateralSurface,
+    surface: &'a MapSurface,
 }
 
 /// `LATERAL_SOURCE` of the raster passes and `cs_bounce`: `diffusion` whole, the taps
@@ -47,7 +47,7 @@ struct Compute<'a> {
 const WHOLE: f64 = lateral::TAPS as f64;
 const SPREAD: f64 = lateral::GIVEN as f64;
 
-/// `cs_transmitted`'s and `cs_bounce`'s invocations per texel (lateral.wgsl, `TEXEL_LANES`),
+/// `cs_transmitted`'s and `cs_bounce`'s invocations per texel (transmitted_map.wgsl, `TEXEL_LANES`),
 /// and the block of texels (across, down) a workgroup of 64 takes. Each texel waits out a
 /// chain of dependent shadow-map and LUT loads and a map has too few texels to hide it: lanes
 /// that share a texel's light and taps halve that wait (measured in docs/lab/performance.md).
@@ -72,14 +72,14 @@ fn spread_constants(base: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
     .concat()
 }
 
-/// The lateral map's passes: the raster and compute evaluations of the transmitted light and
+/// The transmitted map's passes: the raster and compute evaluations of the transmitted light and
 /// the bounce.
-pub struct LateralMapPass {
+pub struct TransmittedMapPass {
     module: wgpu::ShaderModule,
     raster_layout: wgpu::PipelineLayout,
     /// The terms every pipeline below is built with (the plan's).
     terms: Terms,
-    /// `fs_transmitted` into the transmitted light's two layers of the lateral map, keeping
+    /// `fs_transmitted` into the transmitted light's two layers of the transmitted map, keeping
     /// the nearest surface in the map's z-buffer (the bounce pass after it shades only that).
     transmitted: wgpu::RenderPipeline,
     /// `fs_surface` into the texels' surfaces, keeping the nearest surface as `transmitted`
@@ -90,7 +90,7 @@ pub struct LateralMapPass {
     bounce_compute: Option<wgpu::ComputePipeline>,
     /// `cs_clear`: every layer of the map to nothing, first in the frame's first compute pass.
     clear_compute: Option<wgpu::ComputePipeline>,
-    /// `cs_transmitted`'s layout: the frame's group, the object's, [`lateral_compute_layout`],
+    /// `cs_transmitted`'s layout: the frame's group, the object's, [`map_compute_layout`],
     /// [`dispatch_origin_layout`].
     compute_layout: wgpu::PipelineLayout,
     /// Each object's box for its dispatch (the plan's `object_rects`).
@@ -98,11 +98,11 @@ pub struct LateralMapPass {
     /// `[first pass, later passes]`: `fs_bounce` into the map's bounce layer.
     bounce: [wgpu::RenderPipeline; 2],
     /// The plan's: the map holds the transmitted light, and the bounce's layer.
-    transmitted_map: bool,
+    map_holds_transmitted: bool,
     bounce_layer: Option<u32>,
 }
 
-impl LateralMapPass {
+impl TransmittedMapPass {
     /// On the lighting shader `module`, with the lighting pass's group layouts 0 to 2.
     pub fn new(
         device: &wgpu::Device,
@@ -111,14 +111,14 @@ impl LateralMapPass {
         plan: &FramePlan,
     ) -> Self {
         let [frame_layout, object_layout, _] = layouts;
-        let raster_layout = util::pipeline_layout(device, "lateral", &layouts);
+        let raster_layout = util::pipeline_layout(device, "transmitted", &layouts);
         let compute_layout = util::pipeline_layout(
             device,
-            "lateral compute",
+            "transmitted map compute",
             &[
                 frame_layout,
                 object_layout,
-                &lateral_compute_layout(device),
+                &map_compute_layout(device),
                 &dispatch_origin_layout(device),
             ],
         );
@@ -137,7 +137,7 @@ impl LateralMapPass {
             compute_layout,
             object_rects: ObjectRects::new(device, &[], 1),
             bounce: [first, later],
-            transmitted_map: false,
+            map_holds_transmitted: false,
             bounce_layer: None,
         };
         pass.prepare(device, plan);
@@ -148,9 +148,9 @@ impl LateralMapPass {
     /// evaluations it asks for that the pass does not hold yet; other terms than the pass's
     /// build every pipeline again.
     pub fn prepare(&mut self, device: &wgpu::Device, plan: &FramePlan) {
-        self.transmitted_map = plan.transmitted_map;
+        self.map_holds_transmitted = plan.map_holds_transmitted;
         self.bounce_layer = plan.bounce_layer;
-        self.object_rects = ObjectRects::new(device, &plan.object_rects, plan.lateral_downsample);
+        self.object_rects = ObjectRects::new(device, &plan.object_rects, plan.map_downsample);
         if plan.lighting.terms != self.terms {
             self.terms = plan.lighting.terms;
             let [transmitted, surface, first, later] =
@@ -162,11 +162,11 @@ impl LateralMapPass {
                 self.clear_compute,
             ) = (None, None, None);
         }
-        if !plan.lateral.compute {
+        if !plan.map.compute {
             return;
         }
         let whole = diffusion_whole(self.terms, WHOLE);
-        if plan.transmitted_map && self.transmitted_compute.is_none() {
+        if plan.map_holds_transmitted && self.transmitted_compute.is_none() {
             let constants = spread_constants(&diffusion_whole(self.terms, SPREAD));
             self.transmitted_compute =
                 Some(self.build_compute(device, "cs_transmitted", &constants));
@@ -184,11 +184,11 @@ impl LateralMapPass {
 
     /// Whether the plan last given to [`Self::prepare`] has the map filled at all.
     pub fn runs(&self) -> bool {
-        self.transmitted_map || self.bounce_layer.is_some()
+        self.map_holds_transmitted || self.bounce_layer.is_some()
     }
 
-    /// The compute evaluation `entry` of lateral.wgsl with the overrides `constants`:
-    /// `diffusion` whole, the lateral taps included, as the lateral pass's fragment shader
+    /// The compute evaluation `entry` of transmitted_map.wgsl with the overrides `constants`:
+    /// `diffusion` whole, the lateral taps included, as the map pass's fragment shader
     /// evaluates it (LATERAL_SOURCE 2, or 3 where the taps are spread over lanes).
     fn build_compute(
         &self,
@@ -209,7 +209,7 @@ impl LateralMapPass {
         })
     }
 
-    /// The lateral pass (timed "lateral"): the transmitted light into its layers where
+    /// The transmitted map's pass (timed "transmitted"): the transmitted light into its layers where
     /// the plan has the map hold it, writing the map's z-buffer; then the bounce pass (timed "bounce") into the
     /// bounce layer, testing against it. Where the targets hold the texels' surfaces (and the
     /// pipelines are built), the first raster pass records them (`fs_surface`) and compute
@@ -219,7 +219,7 @@ impl LateralMapPass {
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        lateral: &LateralTargets,
+        map: &TransmittedMapTargets,
         frame: &wgpu::BindGroup,
         objects: &[GpuObject],
         maps: &[wgpu::BindGroup],
@@ -231,11 +231,11 @@ impl LateralMapPass {
             maps,
             default_maps,
         };
-        let transmitted = self.transmitted_map && lateral.layer_count >= TRANSMITTED_LAYERS;
-        let bounce = self.bounce_layer.filter(|&l| l < lateral.layer_count);
+        let transmitted = self.map_holds_transmitted && map.layer_count >= TRANSMITTED_LAYERS;
+        let bounce = self.bounce_layer.filter(|&l| l < map.layer_count);
         let transmitted_compute = self.transmitted_compute.as_ref().filter(|_| transmitted);
         let bounce_compute = self.bounce_compute.as_ref().filter(|_| bounce.is_some());
-        let computed = lateral.surface.as_ref().filter(|_| {
+        let computed = map.surface.as_ref().filter(|_| {
             self.clear_compute.is_some()
                 && (!transmitted || transmitted_compute.is_some())
                 && (bounce.is_none() || bounce_compute.is_some())
@@ -243,18 +243,20 @@ impl LateralMapPass {
         if let Some(surface) = computed {
             // The surfaces' raster pass is timed with the first pass it serves.
             let pass = MapPass {
-                timed: if transmitted { "lateral" } else { "bounce" },
+                timed: if transmitted { "transmitted" } else { "bounce" },
                 targets: surface.targets.iter().collect(),
                 first: true,
                 pipeline: &self.surface,
             };
-            self.encode_map_pass(encoder, lateral, &pass, objects, &groups, profiler);
+            self.encode_map_pass(encoder, map, &pass, objects, &groups, profiler);
             // Each object's dispatch writes only its own texels, within its box: the rest of
             // the map must read as nothing (depth 0), which the first compute pass clears.
             // A dispatch clears it for less than render passes that only clear its layers.
             let mut clear = self.clear_compute.as_ref();
-            for (timed, pipeline) in [("lateral", transmitted_compute), ("bounce", bounce_compute)]
-            {
+            for (timed, pipeline) in [
+                ("transmitted", transmitted_compute),
+                ("bounce", bounce_compute),
+            ] {
                 if let Some(pipeline) = pipeline {
                     let compute = Compute {
                         timed,
@@ -262,7 +264,7 @@ impl LateralMapPass {
                         pipeline,
                         surface,
                     };
-                    self.encode_compute(encoder, &compute, lateral, &groups, objects, profiler);
+                    self.encode_compute(encoder, &compute, map, &groups, objects, profiler);
                 }
             }
             return;
@@ -270,35 +272,33 @@ impl LateralMapPass {
         let mut first = true;
         if transmitted {
             let pass = MapPass {
-                timed: "lateral",
-                targets: lateral.layers[..TRANSMITTED_LAYERS as usize]
-                    .iter()
-                    .collect(),
+                timed: "transmitted",
+                targets: map.layers[..TRANSMITTED_LAYERS as usize].iter().collect(),
                 first,
                 pipeline: &self.transmitted,
             };
-            self.encode_map_pass(encoder, lateral, &pass, objects, &groups, profiler);
+            self.encode_map_pass(encoder, map, &pass, objects, &groups, profiler);
             first = false;
         }
         if let Some(layer) = bounce {
             let pass = MapPass {
                 timed: "bounce",
-                targets: vec![&lateral.layers[layer as usize]],
+                targets: vec![&map.layers[layer as usize]],
                 first,
                 pipeline: &self.bounce[usize::from(!first)],
             };
-            self.encode_map_pass(encoder, lateral, &pass, objects, &groups, profiler);
+            self.encode_map_pass(encoder, map, &pass, objects, &groups, profiler);
         }
     }
 
-    /// A compute evaluation of lateral.wgsl once per object (timed as `compute.timed`, summed
+    /// A compute evaluation of transmitted_map.wgsl once per object (timed as `compute.timed`, summed
     /// with the surfaces' raster pass where that is timed alike): each dispatch covers its
     /// object's box and evaluates the texels whose surface is its object's.
     fn encode_compute(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         compute: &Compute<'_>,
-        lateral: &LateralTargets,
+        map: &TransmittedMapTargets,
         groups: &Groups<'_>,
         objects: &[GpuObject],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
@@ -321,19 +321,17 @@ impl LateralMapPass {
                     &[self.object_rects.whole_offset()],
                 );
                 pass.dispatch_workgroups(
-                    lateral.width.div_ceil(TEXEL_BLOCK),
-                    lateral.height.div_ceil(TEXEL_BLOCK),
+                    map.width.div_ceil(TEXEL_BLOCK),
+                    map.height.div_ceil(TEXEL_BLOCK),
                     1,
                 );
             }
             pass.set_pipeline(compute.pipeline);
             for (k, o) in objects.iter().enumerate() {
-                let Some((offset, w, h)) = self.object_rects.dispatch(
-                    k,
-                    lateral.downsample,
-                    lateral.width,
-                    lateral.height,
-                ) else {
+                let Some((offset, w, h)) =
+                    self.object_rects
+                        .dispatch(k, map.downsample, map.width, map.height)
+                else {
                     continue;
                 };
                 pass.set_bind_group(1, &o.bind_group, &[]);
@@ -348,11 +346,11 @@ impl LateralMapPass {
         timer.end(profiler, encoder);
     }
 
-    /// One pass of [`MapPass`] over the lateral map.
+    /// One pass of [`MapPass`] over the transmitted map.
     fn encode_map_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        lateral: &LateralTargets,
+        map: &TransmittedMapTargets,
         map_pass: &MapPass<'_>,
         objects: &[GpuObject],
         groups: &Groups<'_>,
@@ -372,7 +370,7 @@ impl LateralMapPass {
                 color_attachments: &attachments,
                 // Kept: the next pass shades the surfaces this one found nearest.
                 depth_stencil_attachment: util::depth_attachment(
-                    &lateral.zbuffer,
+                    &map.zbuffer,
                     if map_pass.first {
                         wgpu::LoadOp::Clear(1.0)
                     } else {
@@ -420,7 +418,7 @@ fn raster_pipelines(
     // mirrored objects' winding, `Mesh::transform`).
     let raster = |fragment, targets, depth| {
         util::MeshPipeline {
-            label: "lateral",
+            label: "transmitted",
             layout,
             module,
             vertex: "vs_main",
@@ -432,8 +430,8 @@ fn raster_pipelines(
         }
         .create(device)
     };
-    let pair: &[wgpu::TextureFormat] = &[LATERAL_FORMAT, LATERAL_FORMAT];
-    let single: &[wgpu::TextureFormat] = &[LATERAL_FORMAT];
+    let pair: &[wgpu::TextureFormat] = &[TRANSMITTED_MAP_FORMAT, TRANSMITTED_MAP_FORMAT];
+    let single: &[wgpu::TextureFormat] = &[TRANSMITTED_MAP_FORMAT];
     [
         raster("fs_transmitted", pair, util::DepthTest::Nearest),
         raster("fs_surface", pair, util::DepthTest::Nearest),

@@ -1,24 +1,24 @@
-//! The lateral map's targets: the map itself (`diffusion`'s transmitted light and the bounce at
+//! The transmitted map's targets: the map itself (`diffusion`'s transmitted light and the bounce at
 //! a reduced resolution), its z-buffer, the texels' surfaces that the compute evaluation reads,
 //! and each object's box for its dispatch.
 
 use wgpu::util::DeviceExt;
 
-use crate::frame_plan::{LateralShape, TRANSMITTED_LAYERS};
+use crate::frame_plan::{TRANSMITTED_LAYERS, TransmittedMapShape};
 use crate::gpu::GpuContext;
 use crate::passes::util;
 
 /// 32-bit depth beside the light: the lighting pass compares it with its own pixel's to the
 /// fraction of a millimetre, at any distance. Read with loads (no filtering needed).
-pub const LATERAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const TRANSMITTED_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
-/// The lateral pass's targets, of `LATERAL_FORMAT` at `ceil(size / downsample)`: layers 0 and
+/// The transmitted map pass's targets, of `TRANSMITTED_MAP_FORMAT` at `ceil(size / downsample)`: layers 0 and
 /// 1 ([`TRANSMITTED_LAYERS`]) hold `diffusion`'s transmitted light at the texel's surface, every
 /// light's radiance summed (0: the diffuse part, which joins the irradiance; 1: the unscattered
 /// and singly scattered part, which joins the specular target), a = the texel's view depth
 /// (0: nothing there); the bounce's layer comes after them (`bounce_layer`). And the z-buffer of
 /// that resolution.
-pub struct LateralTargets {
+pub struct TransmittedMapTargets {
     /// Pixels per texel along each axis.
     pub downsample: u32,
     /// Layers of `map`.
@@ -32,45 +32,45 @@ pub struct LateralTargets {
     pub(super) layers: Vec<wgpu::TextureView>,
     pub(super) zbuffer: wgpu::TextureView,
     /// Where the transmitted light and the bounce are evaluated in a compute shader
-    /// ([`LateralShape::compute`]): the texels' surfaces.
-    pub(super) surface: Option<LateralSurface>,
+    /// ([`TransmittedMapShape::compute`]): the texels' surfaces.
+    pub(super) surface: Option<MapSurface>,
 }
 
-/// The lateral map's texels' surfaces (`fs_surface` in lateral.wgsl): world position and view
+/// The transmitted map's texels' surfaces (`fs_surface` in transmitted_map.wgsl): world position and view
 /// depth; the normal turned toward the camera and the object's index. `cs_transmitted`
 /// evaluates the transmitted light there.
-pub(super) struct LateralSurface {
+pub(super) struct MapSurface {
     pub(super) targets: [wgpu::TextureView; 2],
-    /// Group 2 of `cs_transmitted` ([`lateral_compute_layout`]): the surfaces, and the map
+    /// Group 2 of `cs_transmitted` ([`map_compute_layout`]): the surfaces, and the map
     /// written as storage.
     pub(super) bind_group: wgpu::BindGroup,
 }
 
-/// Layout of group 2 of the lateral map's compute evaluation (`surface_position`,
-/// `surface_normal` and `transmitted_out` in lateral.wgsl).
-pub(super) fn lateral_compute_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+/// Layout of group 2 of the transmitted map's compute evaluation (`surface_position`,
+/// `surface_normal` and `transmitted_out` in transmitted_map.wgsl).
+pub(super) fn map_compute_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let compute = wgpu::ShaderStages::COMPUTE;
     let d2 = wgpu::TextureViewDimension::D2;
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("lateral compute"),
+        label: Some("transmitted map compute"),
         entries: &[
             util::float_texture_entry(8, compute, false, d2),
             util::float_texture_entry(9, compute, false, d2),
             util::storage_texture_entry(
                 10,
                 compute,
-                LATERAL_FORMAT,
+                TRANSMITTED_MAP_FORMAT,
                 wgpu::TextureViewDimension::D2Array,
             ),
         ],
     })
 }
 
-/// Layout of group 3 of the lateral map's compute evaluation: `dispatch_origin` in
-/// lateral.wgsl, one entry per object at a dynamic offset ([`ObjectRects`]).
+/// Layout of group 3 of the transmitted map's compute evaluation: `dispatch_origin` in
+/// transmitted_map.wgsl, one entry per object at a dynamic offset ([`ObjectRects`]).
 pub(super) fn dispatch_origin_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("lateral dispatch origin"),
+        label: Some("transmitted map dispatch origin"),
         entries: &[wgpu::BindGroupLayoutEntry {
             binding: 1,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -84,7 +84,7 @@ pub(super) fn dispatch_origin_layout(device: &wgpu::Device) -> wgpu::BindGroupLa
     })
 }
 
-/// Each object's box on the lateral map, for its compute dispatch: texels `[x0, y0, x1, y1)`
+/// Each object's box on the transmitted map, for its compute dispatch: texels `[x0, y0, x1, y1)`
 /// (`None`: not in view, no dispatch), for a map of reduction `downsample`. The buffer holds
 /// each box's first texel at a stride the device's dynamic offsets allow, and after them a
 /// zero origin for objects without a box (the whole map).
@@ -124,13 +124,13 @@ impl ObjectRects {
             }
         }
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lateral dispatch origins"),
+            label: Some("transmitted map dispatch origins"),
             contents: &bytes,
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let bind_group = util::bind_group(
             device,
-            "lateral dispatch origins",
+            "transmitted map dispatch origins",
             &dispatch_origin_layout(device),
             [(
                 1,
@@ -180,10 +180,10 @@ impl ObjectRects {
     }
 }
 
-impl LateralTargets {
+impl TransmittedMapTargets {
     /// The map of `shape` for a `width` x `height` frame; with `shape.compute`, the surfaces
     /// the compute evaluations of the transmitted light and the bounce read.
-    pub fn new(ctx: &GpuContext, width: u32, height: u32, shape: LateralShape) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, shape: TransmittedMapShape) -> Self {
         let device = &ctx.device;
         let downsample = shape.downsample.max(1);
         // The transmitted light's two, and the bounce's after them.
@@ -197,11 +197,11 @@ impl LateralTargets {
         };
         let map = util::texture_2d(
             device,
-            "lateral map",
+            "transmitted map",
             w,
             h,
             layer_count,
-            LATERAL_FORMAT,
+            TRANSMITTED_MAP_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC
@@ -210,7 +210,7 @@ impl LateralTargets {
         let layers = (0..layer_count)
             .map(|layer| {
                 map.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("lateral map layer"),
+                    label: Some("transmitted map layer"),
                     dimension: Some(wgpu::TextureViewDimension::D2),
                     base_array_layer: layer,
                     array_layer_count: Some(1),
@@ -226,27 +226,27 @@ impl LateralTargets {
                     w,
                     h,
                     1,
-                    LATERAL_FORMAT,
+                    TRANSMITTED_MAP_FORMAT,
                     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 )
                 .create_view(&Default::default())
             };
             let targets = [
-                target("lateral surface position"),
-                target("lateral surface normal"),
+                target("transmitted map surface position"),
+                target("transmitted map surface normal"),
             ];
             let map_view = util::array_view(&map);
             let bind_group = util::bind_group(
                 device,
-                "lateral compute",
-                &lateral_compute_layout(device),
+                "transmitted map compute",
+                &map_compute_layout(device),
                 [
                     (8, wgpu::BindingResource::TextureView(&targets[0])),
                     (9, wgpu::BindingResource::TextureView(&targets[1])),
                     (10, wgpu::BindingResource::TextureView(&map_view)),
                 ],
             );
-            LateralSurface {
+            MapSurface {
                 targets,
                 bind_group,
             }
@@ -258,7 +258,7 @@ impl LateralTargets {
             height: h,
             map,
             layers,
-            zbuffer: util::depth_buffer(device, "lateral z-buffer", w, h),
+            zbuffer: util::depth_buffer(device, "transmitted map z-buffer", w, h),
             surface,
         }
     }
@@ -269,8 +269,8 @@ impl LateralTargets {
     }
 
     /// The shape these targets were made for.
-    pub fn shape(&self) -> LateralShape {
-        LateralShape {
+    pub fn shape(&self) -> TransmittedMapShape {
+        TransmittedMapShape {
             downsample: self.downsample,
             layers: self.layer_count,
             compute: self.computed(),

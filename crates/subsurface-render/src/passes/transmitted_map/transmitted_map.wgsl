@@ -1,5 +1,5 @@
-// The lateral pass: `diffusion`'s whole transmitted light, every light together, at each texel
-// of the reduced-resolution lateral map (layer 0 the diffuse part, which joins the irradiance;
+// The map pass: `diffusion`'s whole transmitted light, every light together, at each texel
+// of the reduced-resolution transmitted map (layer 0 the diffuse part, which joins the irradiance;
 // layer 1 the unscattered and singly scattered part, which joins the specular target; a = the
 // texel's view depth, 0 where nothing was drawn). What crosses skin changes over the medium's
 // decay length, not from pixel to pixel (the diffuse part is blurred by the profile after this
@@ -9,7 +9,7 @@
 // lateral taps alone in the map, `diffusion` cost +65 % of `paper`'s lighting pass on an H100
 // at 1920x1080; with everything, +19 % (docs/lab/performance.md).
 //
-// Two ways to fill the map, the same numbers (`LateralPass` in the settings):
+// Two ways to fill the map, the same numbers (`MapEvaluation` in the settings):
 // - `fs_transmitted` evaluates each texel in the raster pass's fragment shader;
 // - `fs_surface` only records each texel's surface; `cs_clear` empties the map, then
 //   `cs_transmitted`, dispatched once per object with that object's group 1 over the object's
@@ -64,7 +64,7 @@ fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> Lateral
     return LateralPair(vec4<f32>(t.diffuse, depth), vec4<f32>(t.ballistic, depth));
 }
 
-// The surface at each texel, for `cs_transmitted` (lateral_map/targets.rs, `LateralTargets`): the world
+// The surface at each texel, for `cs_transmitted` (transmitted_map/targets.rs, `TransmittedMapTargets`): the world
 // position and view depth (0: nothing), and the vertex normal turned toward the camera's side
 // with the object's index in the draw list. 32-bit floats: the evaluation sees the point
 // `fs_transmitted` would, to the bit.
@@ -74,14 +74,14 @@ fn fs_surface(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair
     return LateralPair(vec4<f32>(in.world, depth), vec4<f32>(oriented_normal(in, front), f32(object.index)));
 }
 
-// Group 2 of the compute evaluation (lateral_map/targets.rs, `lateral_compute_layout`); the lighting
+// Group 2 of the compute evaluation (transmitted_map/targets.rs, `map_compute_layout`); the lighting
 // pass's group 2 (texture-space maps) uses bindings 0 to 3.
 @group(2) @binding(8) var surface_position: texture_2d<f32>;
 @group(2) @binding(9) var surface_normal: texture_2d<f32>;
-@group(2) @binding(10) var lateral_out: texture_storage_2d_array<rgba32float, write>;
+@group(2) @binding(10) var map_out: texture_storage_2d_array<rgba32float, write>;
 // The first texel of this dispatch (xy): each object's dispatch covers only its box on screen
-// (lateral_map/targets.rs, `ObjectRects`), one entry per object at a dynamic offset.
-// Binding 1: the lighting pass's group 3 has the lateral map at 0.
+// (transmitted_map/targets.rs, `ObjectRects`), one entry per object at a dynamic offset.
+// Binding 1: the lighting pass's group 3 has the transmitted map at 0.
 @group(3) @binding(1) var<uniform> dispatch_origin: vec4<u32>;
 
 // A texel's surface as `fs_surface` recorded it, where it is this dispatch's object's.
@@ -94,7 +94,7 @@ struct TexelSurface {
 };
 
 // Texels of other objects and empty ones are left as they are: the pass cleared the map
-// before the dispatches (lateral_map/mod.rs, `LateralMapPass::encode`), and each texel is its object's alone.
+// before the dispatches (transmitted_map/mod.rs, `TransmittedMapPass::encode`), and each texel is its object's alone.
 fn texel_surface(id: vec3<u32>) -> TexelSurface {
     let at = dispatch_origin.xy + id.xy;
     let texel = vec2<i32>(at);
@@ -195,19 +195,19 @@ fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoca
         out.diffuse += lane_diffuse[first_lane + k];
         out.ballistic += lane_ballistic[first_lane + k];
     }
-    textureStore(lateral_out, s.texel, 0, vec4<f32>(out.diffuse, s.depth));
-    textureStore(lateral_out, s.texel, 1, vec4<f32>(out.ballistic, s.depth));
+    textureStore(map_out, s.texel, 0, vec4<f32>(out.diffuse, s.depth));
+    textureStore(map_out, s.texel, 1, vec4<f32>(out.ballistic, s.depth));
 }
 
 // Every layer of the map to nothing (depth 0), before the objects' dispatches write their
 // own texels: one dispatch in the compute pass instead of render passes that only clear.
 @compute @workgroup_size(8, 8)
 fn cs_clear(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id.xy >= textureDimensions(lateral_out))) {
+    if (any(id.xy >= textureDimensions(map_out))) {
         return;
     }
-    for (var layer = 0u; layer < textureNumLayers(lateral_out); layer++) {
-        textureStore(lateral_out, vec2<i32>(id.xy), i32(layer), vec4<f32>(0.0));
+    for (var layer = 0u; layer < textureNumLayers(map_out); layer++) {
+        textureStore(map_out, vec2<i32>(id.xy), i32(layer), vec4<f32>(0.0));
     }
 }
 
@@ -233,5 +233,5 @@ fn cs_bounce(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_
     for (var k = 0u; k < TEXEL_LANES; k++) {
         sum += lane_taps[slot * TEXEL_LANES + k];
     }
-    textureStore(lateral_out, s.texel, i32(lights.bounce_layer), vec4<f32>(sum, s.depth));
+    textureStore(map_out, s.texel, i32(lights.bounce_layer), vec4<f32>(sum, s.depth));
 }
