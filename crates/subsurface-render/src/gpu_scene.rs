@@ -238,27 +238,40 @@ pub fn upload_objects(
             (None, Some(g)) => format!("the {what} texture of {g}"),
             (None, None) => "the texture".to_string(),
         };
-        let albedo = upload_texture(
-            ctx,
-            object.albedo_texture.as_ref(),
-            wgpu::TextureFormat::Rgba8UnormSrgb,
-            &format!("{label}.material.albedo_texture"),
-            &source(&m.albedo_texture, "base colour"),
-        )?;
-        let normal = upload_texture(
-            ctx,
-            object.normal_texture.as_ref(),
-            wgpu::TextureFormat::Rgba8Unorm,
-            &format!("{label}.material.normal_texture"),
-            &source(&m.normal_texture, "normal"),
-        )?;
-        let specular = upload_texture(
-            ctx,
-            object.specular_texture.as_ref(),
-            wgpu::TextureFormat::Rgba8Unorm,
-            &format!("{label}.material.specular_texture"),
-            &source(&m.specular_texture, "specular"),
-        )?;
+        use wgpu::TextureFormat::{Rgba8Unorm, Rgba8UnormSrgb};
+        let [albedo, normal, specular] = [
+            (
+                &object.albedo_texture,
+                Rgba8UnormSrgb,
+                "albedo",
+                &m.albedo_texture,
+                "base colour",
+            ),
+            (
+                &object.normal_texture,
+                Rgba8Unorm,
+                "normal",
+                &m.normal_texture,
+                "normal",
+            ),
+            (
+                &object.specular_texture,
+                Rgba8Unorm,
+                "specular",
+                &m.specular_texture,
+                "specular",
+            ),
+        ]
+        .map(|(image, format, key, own, what)| {
+            upload_texture(
+                ctx,
+                image.as_ref(),
+                format,
+                &format!("{label}.material.{key}_texture"),
+                &source(own, what),
+            )
+        });
+        let (albedo, normal, specular) = (albedo?, normal?, specular?);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&label),
             layout,
