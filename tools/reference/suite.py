@@ -235,34 +235,35 @@ def view_setup(shape):
     """(camera position, target, fov_y_deg, near, far, light distance, spot inner half-angle,
     object TOML lines, mm_per_unit, shadow bias, size, note) for a shape."""
     kind, size = SHAPES[shape]
+
+    def canonical(mesh, fov, note, inner=9.0):
+        # The canonical shapes' frame: 0.2 in front, the lights 0.35 away, millimetre units.
+        return dict(cam=[0.0, 0.0, 0.2], target=[0.0, 0.0, 0.0], fov=fov, near=0.05, far=2.0,
+                    dist=0.35, inner=inner, mesh=mesh, mm=1000.0, bias=0.0005, size=SIZE, extra="",
+                    note=note)
+
+    def fov_framing(width):
+        return math.degrees(2 * math.atan(width / 2 / 0.2))
+
     if kind == "slab":
         # A slab wider than the view (80 mm, the view 20 mm across): an infinite slab, as the
         # canonical tilted slab. Uniform: its centre is one long average.
         mesh = f'mesh = {{ shape = "slab", width = 0.08, height = 0.08, thickness = {size:.6g} }}'
-        return dict(cam=[0.0, 0.0, 0.2], target=[0.0, 0.0, 0.0], fov=5.7248, near=0.05, far=2.0,
-                    dist=0.35, inner=9.0, mesh=mesh, mm=1000.0, bias=0.0005, size=SIZE, extra="",
-                    note=f"a {size * 1000:.0f} mm slab, 80 mm square, wider than the view (20 mm)")
+        return canonical(mesh, 5.7248,
+                         f"a {size * 1000:.0f} mm slab, 80 mm square, wider than the view (20 mm)")
     if kind == "cylinder":
         r = size / 2
-        frame = 2 * r * 1.6  # the cylinder fills 62 % of the width; longer than the view
-        fov = math.degrees(2 * math.atan(frame / 2 / 0.2))
+        # The cylinder fills 62 % of the width; longer than the view.
         mesh = f'mesh = {{ shape = "cylinder", radius = {r:.6g}, length = 0.12, segments = 256 }}'
-        return dict(cam=[0.0, 0.0, 0.2], target=[0.0, 0.0, 0.0], fov=fov, near=0.05, far=2.0,
-                    dist=0.35, inner=9.0, mesh=mesh, mm=1000.0, bias=0.0005, size=SIZE, extra="",
-                    note=f"a {size * 1000:.0f} mm cylinder (a finger's proxy) seen side on, longer than the view")
+        return canonical(mesh, fov_framing(2 * r * 1.6),
+                         f"a {size * 1000:.0f} mm cylinder (a finger's proxy) seen side on, longer than the view")
     if kind == "sphere":
         r = size / 2
-        frame = 2 * r * 1.5
-        fov = math.degrees(2 * math.atan(frame / 2 / 0.2))
         mesh = f'mesh = {{ shape = "sphere", radius = {r:.6g}, segments = 128 }}'
-        return dict(cam=[0.0, 0.0, 0.2], target=[0.0, 0.0, 0.0], fov=fov, near=0.05, far=2.0,
-                    dist=0.35, inner=9.0, mesh=mesh, mm=1000.0, bias=0.0005, size=SIZE, extra="",
-                    note=f"a {size * 1000:.0f} mm sphere")
+        return canonical(mesh, fov_framing(2 * r * 1.5), f"a {size * 1000:.0f} mm sphere")
     if kind == "wedge":
         mesh = 'mesh = { shape = "wedge", length = 0.08, height = 0.06, max_thickness = 0.025 }'
-        return dict(cam=[0.0, 0.0, 0.2], target=[0.0, 0.0, 0.0], fov=28.0, near=0.05, far=2.0,
-                    dist=0.35, inner=14.0, mesh=mesh, mm=1000.0, bias=0.0005, size=SIZE, extra="",
-                    note="the canonical wedge, 0 to 25 mm thick over 80 mm")
+        return canonical(mesh, 28.0, "the canonical wedge, 0 to 25 mm thick over 80 mm", inner=14.0)
     if kind == "hand":
         # The canonical hand's placement (palm to the camera), framed closer; 192 pixels: the
         # fingers are 15 mm wide.
@@ -1296,6 +1297,12 @@ def cmd_report(a):
     print(f"wrote {out}" + (f", {hist}" if drawn else "") + f" ({doc['seconds']:.0f} s)", file=sys.stderr)
 
 
+def cmd_queue(_a):
+    held = set(load_holdout()["held_out"])
+    for n in render_queue():
+        print(n, "(held out)" if n in held else "")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -1338,22 +1345,16 @@ def main():
     rp.add_argument("--markdown", metavar="FILE", help="also write the Markdown tables to FILE")
     rp.add_argument("--histogram", metavar="PNG", help="default: docs/images/generalization.png")
     a = p.parse_args()
-    if a.cmd == "generate":
-        cmd_generate(a)
-    elif a.cmd == "holdout":
-        cmd_holdout(a)
-    elif a.cmd == "render":
-        cmd_render(a)
-    elif a.cmd == "depth-sweep":
-        cmd_depth_sweep(a)
-    elif a.cmd == "check":
-        cmd_check(a)
-    elif a.cmd == "report":
-        cmd_report(a)
-    elif a.cmd == "queue":
-        held = set(load_holdout()["held_out"])
-        for n in render_queue():
-            print(n, "(held out)" if n in held else "")
+    commands = {
+        "generate": cmd_generate,
+        "holdout": cmd_holdout,
+        "render": cmd_render,
+        "depth-sweep": cmd_depth_sweep,
+        "check": cmd_check,
+        "report": cmd_report,
+        "queue": cmd_queue,
+    }
+    commands[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -379,26 +379,14 @@ fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawRe
         .max(1e-12)
         * 2.0;
     let y_min = y_max * 1e-7;
-    let mut chart = ChartBuilder::on(&left)
-        .caption(
-            format!(
-                "{}: R(r) (solid) and {}-Gaussian fit (dashed)",
-                m.name(),
-                fit.profile.terms().len()
-            ),
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+    let caption = format!(
+        "{}: R(r) (solid) and {}-Gaussian fit (dashed)",
+        m.name(),
+        fit.profile.terms().len()
+    );
+    let mut chart = plot::chart_builder(&left, caption, 70)
         .build_cartesian_2d(0.0..r_max, (y_min..y_max).log_scale())?;
-    chart
-        .configure_mesh()
-        .x_desc("r (mm)")
-        .y_desc("R(r) (1/mm^2)")
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style(("sans-serif", 14))
-        .draw()?;
+    plot::axes(&mut chart, "r (mm)", "R(r) (1/mm^2)", true)?;
     for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let channel = |v: &[[f64; 3]]| -> Vec<(f64, f64)> {
             rs.iter()
@@ -424,21 +412,9 @@ fn draw_plot(root: &plot::Area, m: &Material, fit: &GaussianFit) -> plot::DrawRe
         .fold(0.0, f64::max);
     let s_max = (2.5 * v_max.sqrt()).clamp(1.0, r_max.max(1.0));
     let ss: Vec<f64> = (0..=n).map(|i| s_max * i as f64 / n as f64).collect();
-    let mut chart = ChartBuilder::on(&right)
-        .caption(
-            "transmittance T(s) of the fit, T(0) = 1",
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
+    let mut chart = plot::chart_builder(&right, "transmittance T(s) of the fit, T(0) = 1", 60)
         .build_cartesian_2d(0.0..s_max, 0.0..1.05)?;
-    chart
-        .configure_mesh()
-        .x_desc("thickness s (mm)")
-        .y_desc("T(s)")
-        .label_style(("sans-serif", 14))
-        .draw()?;
+    plot::axes(&mut chart, "thickness s (mm)", "T(s)", false)?;
     for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let points = ss.iter().map(|&s| (s, t_profile.transmittance(s)[c]));
         plot::line(&mut chart, points, color, plot::CHANNEL_NAMES[c])?;

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use plotters::coord::Shift;
-use plotters::coord::ranged1d::Ranged;
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
@@ -51,6 +51,40 @@ pub fn draw_image(
         drawn.map_err(|e| anyhow!("drawing failed: {e}"))?;
     }
     Ok(image::RgbImage::from_raw(size.0, size.1, buf).expect("w * h RGB pixels"))
+}
+
+/// A chart builder on `area`: `caption` above, and room for the axes' labels (`y_labels`
+/// pixels wide at the left).
+pub fn chart_builder<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: impl AsRef<str>,
+    y_labels: u32,
+) -> ChartBuilder<'a, 'a, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(caption, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(y_labels);
+    builder
+}
+
+/// Draws `chart`'s grid and axes, described by `x_desc` and `y_desc`; a logarithmic y axis
+/// (`log_y`) labels its decades as powers of ten.
+pub fn axes<Y>(chart: &mut Chart<'_, '_, Y>, x_desc: &str, y_desc: &str, log_y: bool) -> DrawResult
+where
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let powers = |v: &f64| format!("{v:.0e}");
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 14));
+    if log_y {
+        mesh.y_label_formatter(&powers);
+    }
+    mesh.draw()?;
+    Ok(())
 }
 
 /// A solid line 2 pixels wide, with an entry in the legend.

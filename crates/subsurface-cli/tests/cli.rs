@@ -98,25 +98,36 @@ fn kernel_json_has_n_taps_centre_first() {
     assert_eq!(taps[0][3], 0.0, "centre tap first");
 }
 
-/// `bench` at 64x48, one warm-up and two timed frames, JSON, with `extra` flags.
-fn small_bench<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+/// `bench` at 64x48, one warm-up and two timed frames, JSON, with the flags of `extra` (split
+/// at white space, as a shell would).
+fn small_bench(extra: &str) -> Vec<&str> {
     let mut args = vec![
         "bench", "--width", "64", "--height", "48", "--warmup", "1", "--frames", "2", "--json",
     ];
-    args.extend_from_slice(extra);
+    args.extend(extra.split_whitespace());
     args
+}
+
+/// The JSON report of `subsurface ARGS`, run in a scratch directory `name`; None when the
+/// test is skipped for want of a GPU adapter.
+fn bench_json(name: &str, args: &[&str]) -> Option<serde_json::Value> {
+    let (_, out) = run_with_gpu(name, args)?;
+    Some(serde_json::from_slice(&out.stdout).unwrap())
+}
+
+/// The runs of [`small_bench`] with `extra` (see [`bench_json`]).
+fn bench_runs(extra: &str) -> Option<Vec<serde_json::Value>> {
+    let v = bench_json("bench", &small_bench(extra))?;
+    Some(v["runs"].as_array().unwrap().clone())
 }
 
 #[test]
 fn bench_json_has_runs_with_positive_times() {
-    let args = small_bench(&["--characters", "1,2", "--sss", "none,separable"]);
-    let Some((_, out)) = run_with_gpu("bench", &args) else {
+    let Some(runs) = bench_runs("--characters 1,2 --sss none,separable") else {
         return;
     };
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let runs = v["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 4, "2 character counts x 2 methods");
-    for r in runs {
+    for r in &runs {
         assert!(r["characters"] == 1 || r["characters"] == 2, "{r}");
         assert!(r["width"] == 64 && r["height"] == 48, "{r}");
         assert!(r["frame_ms"].as_f64().unwrap() > 0.0, "{r}");
@@ -143,20 +154,12 @@ fn bench_json_has_runs_with_positive_times() {
 /// middle round's). `--rounds 0` is one line of error.
 #[test]
 fn bench_rounds_measure_each_configuration_in_turn() {
-    let mut args = small_bench(&[
-        "--sss",
-        "none",
-        "--transmittance",
-        "off,paper",
-        "--rounds",
-        "3",
-    ]);
+    let mut args = small_bench("--sss none --transmittance off,paper --rounds 3");
     let frames = args.iter().position(|a| *a == "--frames").unwrap() + 1;
     args[frames] = "1";
-    let Some((_, out)) = run_with_gpu("bench-rounds", &args) else {
+    let Some(v) = bench_json("bench-rounds", &args) else {
         return;
     };
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["rounds"], 3);
     let runs = v["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2, "one run per configuration, not per round");
@@ -193,21 +196,11 @@ fn bench_rounds_measure_each_configuration_in_turn() {
 /// `--lateral-taps 0,12` measures `diffusion` at both counts; the other methods once.
 #[test]
 fn bench_measures_diffusion_at_each_lateral_tap_count() {
-    let args = small_bench(&[
-        "--sss",
-        "none",
-        "--transmittance",
-        "paper,diffusion",
-        "--lateral-taps",
-        "0,12",
-    ]);
-    let Some((_, out)) = run_with_gpu("bench", &args) else {
+    let Some(runs) = bench_runs("--sss none --transmittance paper,diffusion --lateral-taps 0,12")
+    else {
         return;
     };
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let runs: Vec<(String, Option<u64>)> = v["runs"]
-        .as_array()
-        .unwrap()
+    let runs: Vec<(String, Option<u64>)> = runs
         .iter()
         .map(|r| {
             let tm = r["transmittance"].as_str().unwrap().to_string();
@@ -225,23 +218,13 @@ fn bench_measures_diffusion_at_each_lateral_tap_count() {
 }
 
 /// `--map-texel-mm 0,20` measures `diffusion` with the taps at every pixel and on the
-/// transmitted map: each run says the reduction it got, and only the map's run times a lateral
+/// transmitted map: each run says the reduction it got, and only the map's run times a map
 /// pass (at 64x48 the default hand's pixels are about 7 profile mm, so 20 mm gives 2x2).
 #[test]
 fn bench_measures_diffusion_with_and_without_the_transmitted_map() {
-    let args = small_bench(&[
-        "--sss",
-        "none",
-        "--transmittance",
-        "diffusion",
-        "--map-texel-mm",
-        "0,20",
-    ]);
-    let Some((_, out)) = run_with_gpu("bench", &args) else {
+    let Some(runs) = bench_runs("--sss none --transmittance diffusion --map-texel-mm 0,20") else {
         return;
     };
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let runs = v["runs"].as_array().unwrap();
     let got: Vec<(Option<f64>, Option<u64>, bool)> = runs
         .iter()
         .map(|r| {
@@ -268,21 +251,10 @@ fn bench_measures_diffusion_with_and_without_the_transmitted_map() {
 /// measured time with the ratio to the bandwidth bound.
 #[test]
 fn bench_reports_flip_and_memory_bound() {
-    let args = small_bench(&[
-        "--sss",
-        "separable",
-        "--samples",
-        "7",
-        "--jitter",
-        "--flip-vs",
-        "33",
-        "--bandwidth",
-        "10",
-    ]);
-    let Some((_, out)) = run_with_gpu("bench-bound", &args) else {
+    let args = small_bench("--sss separable --samples 7 --jitter --flip-vs 33 --bandwidth 10");
+    let Some(v) = bench_json("bench-bound", &args) else {
         return;
     };
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["bandwidth_gbps"], 10.0);
     assert_eq!(v["flip_vs"], 33);
     let r = &v["runs"][0];

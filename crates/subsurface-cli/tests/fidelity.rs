@@ -41,15 +41,16 @@ fn mitsuba_available() -> bool {
     ok
 }
 
-/// Whether a GPU adapter exists (the compare tests render); SUBSURFACE_REQUIRE_GPU=1 turns a
-/// missing adapter into a failure, as in the renderer's tests.
-fn gpu_available() -> bool {
+/// A scratch directory `name` for a test that renders, or None (the test is skipped) where no
+/// GPU adapter exists; SUBSURFACE_REQUIRE_GPU=1 turns a missing adapter into a failure, as in
+/// the renderer's tests.
+fn gpu_tempdir(name: &str) -> Option<PathBuf> {
     match subsurface_render::GpuContext::new_headless() {
-        Ok(_) => true,
+        Ok(_) => Some(tempdir(name)),
         Err(e) if env_is_1("SUBSURFACE_REQUIRE_GPU") => panic!("SUBSURFACE_REQUIRE_GPU=1 but {e}"),
         Err(e) => {
             eprintln!("skipping: no GPU adapter: {e}");
-            false
+            None
         }
     }
 }
@@ -261,6 +262,19 @@ fn f(v: &serde_json::Value, k: &str) -> f64 {
         .unwrap_or_else(|| panic!("{k} missing in {v}"))
 }
 
+/// Per channel `c`: `(c, recorded, got)`, the three entries of the array `field` of a record
+/// and of a fresh result.
+fn per_channel<'a>(
+    recorded: &'a serde_json::Value,
+    got: &'a serde_json::Value,
+    field: &'a str,
+) -> impl Iterator<Item = (usize, f64, f64)> + 'a {
+    (0..3).map(move |c| {
+        let v = |r: &serde_json::Value| r[field][c].as_f64().unwrap();
+        (c, v(recorded), v(got))
+    })
+}
+
 /// The default method (`subsurface render` with no flags): what the guard holds to its record.
 const DEFAULT: (&str, &str) = ("separable", "diffusion");
 
@@ -275,10 +289,9 @@ fn regression_guard_against_committed_references() {
         &std::fs::read_to_string(root().join("references/fidelity.json")).unwrap(),
     )
     .unwrap();
-    if !gpu_available() {
+    let Some(out) = gpu_tempdir("guard") else {
         return;
-    }
-    let out = tempdir("guard");
+    };
     let mut checked = 0;
     for (name, rec) in recorded["scenes"].as_object().unwrap() {
         let reference = root().join(format!("references/{name}.exr"));
@@ -350,9 +363,7 @@ fn regression_guard_against_committed_references() {
         // The knife edge: the blur's width across a shadow edge, per channel, within 5 % of
         // the recorded width (a kernel of another width moves it by far more).
         if let Some(e) = rec.get("edge") {
-            for c in 0..3 {
-                let want = e["edge_width_mm"][c].as_f64().unwrap();
-                let got = good["edge"]["edge_width_mm"][c].as_f64().unwrap();
+            for (c, want, got) in per_channel(e, &good["edge"], "edge_width_mm") {
                 assert!(
                     (got - want).abs() <= 0.05 * want + 0.05,
                     "{name}: edge width channel {c} {got:.3} mm vs recorded {want:.3} mm"
@@ -369,9 +380,7 @@ fn regression_guard_against_committed_references() {
         // The wedge's light against thickness: the worst significant 1 mm bin per channel
         // within 3 points of its record (a T(s) of another decay moves it by tens).
         if let Some(t) = rec.get("thickness") {
-            for c in 0..3 {
-                let want = t["max_abs_rel_error"][c].as_f64().unwrap();
-                let got = good["thickness"]["max_abs_rel_error"][c].as_f64().unwrap();
+            for (c, want, got) in per_channel(t, &good["thickness"], "max_abs_rel_error") {
                 assert!(
                     (got - want).abs() <= 0.03,
                     "{name}: worst bin against thickness, channel {c}, {got:.3} vs recorded {want:.3}"
@@ -394,10 +403,9 @@ fn regression_guard_against_committed_references() {
 /// no scattering and no transmittance, on FLIP or on every region.
 #[test]
 fn presets_meet_their_region_targets() {
-    if !gpu_available() {
+    let Some(out) = gpu_tempdir("presets") else {
         return;
-    }
-    let out = tempdir("presets");
+    };
     let mut checked = 0;
     for entry in std::fs::read_dir(root().join("scenes/canonical")).unwrap() {
         let scene = entry.unwrap().path();
@@ -471,10 +479,9 @@ fn the_bounce_is_the_light_between_parts() {
         recorded.contains_key("hand-backlit"),
         "fidelity.json records no hand without light between parts"
     );
-    if !gpu_available() {
+    let Some(out) = gpu_tempdir("no-bounce") else {
         return;
-    }
-    let out = tempdir("no-bounce");
+    };
     let region = |v: &serde_json::Value, name: &str| {
         v["regions"]
             .as_array()
@@ -537,10 +544,9 @@ fn the_bounce_is_the_light_between_parts() {
 
 #[test]
 fn compare_flip_agrees_with_nv_flip() {
-    if !gpu_available() {
+    let Some(out) = gpu_tempdir("flip") else {
         return;
-    }
-    let out = tempdir("flip");
+    };
     let png = out.join("side.png");
     let r = compare_json(
         &root().join("references/sphere-frontlit.exr"),

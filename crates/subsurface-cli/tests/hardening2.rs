@@ -3,32 +3,36 @@
 
 mod common;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{assert_success, bin, error_line, gpu_available, subsurface, tempdir, text};
+use common::{
+    assert_success, bin, error_line, gpu_available, gpu_tempdir, refused, scene_toml, subsurface,
+    tempdir, text, write_exr,
+};
 
-/// A 32x24 scene: camera, one spot light, one small sphere; `edit` rewrites its text.
+/// [`scene_toml`]'s scene of one small sphere; `edit` rewrites its text.
 fn scene(edit: impl Fn(String) -> String) -> String {
-    edit(
-        r#"[camera]
-position = [0.025, 0.025, 0.2]
-target = [0.025, 0.025, 0.0]
-[render]
-width = 32
-height = 24
-[[lights]]
-kind = "spot"
-position = [0.0, 0.0, 0.2]
-shadow_map_size = 64
-[[objects]]
-mesh = { shape = "sphere", radius = 0.02, segments = 16 }
-translation = [0.025, 0.025, 0.0]
-[objects.material]
-"#
-        .to_string(),
-    )
+    edit(scene_toml(
+        "",
+        "mesh = { shape = \"sphere\", radius = 0.02, segments = 16 }\n\
+         translation = [0.025, 0.025, 0.0]\n[objects.material]",
+    ))
+}
+
+/// Writes [`scene`] as `s.toml` in `dir`.
+fn write_scene(dir: &Path, edit: impl Fn(String) -> String) {
+    std::fs::write(dir.join("s.toml"), scene(edit)).unwrap();
+}
+
+/// A scratch directory `name` holding [`scene`] as `s.toml` and a grey reference `ref.exr` for
+/// it; None when the test is skipped for want of a GPU adapter.
+fn compare_dir(name: &str) -> Option<PathBuf> {
+    let dir = gpu_tempdir(name)?;
+    write_scene(&dir, |s| s);
+    write_exr(&dir.join("ref.exr"), 32, 24, |_, _| 0.1);
+    Some(dir)
 }
 
 /// Runs `subsurface ARGS` in `dir` with environment `env`, killed after 60 s (a FIFO read
@@ -91,12 +95,6 @@ fn assert_refused_everywhere(dir: &Path, scene_file: &str, want: &[&str]) {
     }
 }
 
-fn write_exr(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) {
-    image::Rgb32FImage::from_fn(w, h, |x, y| image::Rgb([f(x, y); 3]))
-        .save(path)
-        .unwrap();
-}
-
 /// Item 1: serde's arrays ignored trailing elements, NaN and strings included.
 #[test]
 fn arrays_with_extra_elements_are_refused() {
@@ -129,15 +127,13 @@ fn arrays_with_extra_elements_are_refused() {
         ),
     ];
     for (from, to, want) in cases {
-        std::fs::write(dir.join("s.toml"), scene(|s| s.replacen(from, to, 1))).unwrap();
+        write_scene(&dir, |s| s.replacen(from, to, 1));
         assert_refused_everywhere(&dir, "s.toml", &["s.toml:", want]);
     }
     // A medium's coefficients too (the medium's own message names the table).
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| s + "medium = { sigma_a = [0.01, 0.02, 0.05, nan], sigma_s = [1, 1, 1] }\n"),
-    )
-    .unwrap();
+    write_scene(&dir, |s| {
+        s + "medium = { sigma_a = [0.01, 0.02, 0.05, nan], sigma_s = [1, 1, 1] }\n"
+    });
     assert_refused_everywhere(&dir, "s.toml", &["s.toml:", "objects.material.medium"]);
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -147,15 +143,11 @@ fn arrays_with_extra_elements_are_refused() {
 fn eta_up_to_ten_is_a_medium() {
     let dir = tempdir("eta");
     for eta in ["4", "10"] {
-        std::fs::write(
-            dir.join("s.toml"),
-            scene(|s| {
-                s + &format!(
-                    "medium = {{ sigma_a = [0.01, 0.02, 0.05], sigma_s = [1, 1.2, 1.5], eta = {eta} }}\n"
-                )
-            }),
-        )
-        .unwrap();
+        write_scene(&dir, |s| {
+            s + &format!(
+                "medium = {{ sigma_a = [0.01, 0.02, 0.05], sigma_s = [1, 1.2, 1.5], eta = {eta} }}\n"
+            )
+        });
         assert_success(&subsurface(
             &["export-mitsuba", "s.toml", "--out", "m"],
             &dir,
@@ -185,11 +177,7 @@ fn extreme_media_name_the_coefficient() {
             "objects[0].material.medium.sigma_a.r: must be in",
         ),
     ] {
-        std::fs::write(
-            dir.join("s.toml"),
-            scene(|s| s + &format!("medium = {{ {medium} }}\n")),
-        )
-        .unwrap();
+        write_scene(&dir, |s| s + &format!("medium = {{ {medium} }}\n"));
         assert_refused_everywhere(&dir, "s.toml", &["s.toml: ", want]);
     }
     std::fs::remove_dir_all(&dir).ok();
@@ -228,16 +216,12 @@ fn glb_quad(h: f32, instances: usize, mode: u32) -> Vec<u8> {
 fn huge_finite_geometry_is_refused_at_load() {
     let dir = tempdir("huge");
     std::fs::write(dir.join("huge.glb"), glb_quad(3e38, 1, 4)).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| {
-            s.replace(
-                r#"mesh = { shape = "sphere", radius = 0.02, segments = 16 }"#,
-                r#"mesh = { gltf = "huge.glb" }"#,
-            )
-        }),
-    )
-    .unwrap();
+    write_scene(&dir, |s| {
+        s.replace(
+            r#"mesh = { shape = "sphere", radius = 0.02, segments = 16 }"#,
+            r#"mesh = { gltf = "huge.glb" }"#,
+        )
+    });
     assert_refused_everywhere(
         &dir,
         "s.toml",
@@ -246,11 +230,7 @@ fn huge_finite_geometry_is_refused_at_load() {
             "huge.glb: not a valid glTF file: the model's extent overflows 32-bit floats",
         ],
     );
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| s.replace("radius = 0.02", "radius = 3e38")),
-    )
-    .unwrap();
+    write_scene(&dir, |s| s.replace("radius = 0.02", "radius = 3e38"));
     assert_refused_everywhere(
         &dir,
         "s.toml",
@@ -274,7 +254,7 @@ fn fifos_and_devices_are_refused_without_reading() {
     if !ok {
         return;
     }
-    std::fs::write(dir.join("s.toml"), scene(|s| s)).unwrap();
+    write_scene(&dir, |s| s);
     write_exr(&dir.join("ref.exr"), 32, 24, |_, _| 0.1);
     std::fs::write(
         dir.join("t.toml"),
@@ -327,7 +307,7 @@ fn fifos_and_devices_are_refused_without_reading() {
 #[test]
 fn bad_memory_limit_values_name_the_variable() {
     let dir = tempdir("memlimit");
-    std::fs::write(dir.join("s.toml"), scene(|s| s)).unwrap();
+    write_scene(&dir, |s| s);
     for bad in ["abc", "-1", "nan", "0", ""] {
         for args in [
             &["render", "s.toml", "-o", "o.png"][..],
@@ -359,18 +339,18 @@ fn bad_memory_limit_values_name_the_variable() {
 /// view are as far past the budget and load in a moment in a debug build.)
 #[test]
 fn absurd_instance_counts_meet_the_work_budget() {
-    let dir = tempdir("work");
-    if !gpu_available(&dir) {
+    let Some(dir) = gpu_tempdir("work") else {
         return;
-    }
+    };
     std::fs::write(dir.join("many.glb"), glb_quad(0.05, 300, 4)).unwrap();
     let start = Instant::now();
-    let e = error_line(&subsurface(
+    let e = refused(
         &[
             "render", "--model", "many.glb", "--width", "8192", "--height", "8192", "-o", "o.png",
         ],
         &dir,
-    ));
+        "o.png",
+    );
     assert!(
         e.starts_with("error: objects[0]: many (600 triangles) covers about"),
         "{e}"
@@ -381,16 +361,16 @@ fn absurd_instance_counts_meet_the_work_budget() {
         "{:?}",
         start.elapsed()
     );
-    assert!(!dir.join("o.png").exists());
     // The issue's own file: 99,000 instances of one quad at the default size. Tangents were
     // generated over the whole model, where mikktspace welded the instances' identical corners
     // and ran for minutes before the budget could answer.
     std::fs::write(dir.join("many.glb"), glb_quad(0.05, 99_000, 4)).unwrap();
     let start = Instant::now();
-    let e = error_line(&subsurface(
+    let e = refused(
         &["render", "--model", "many.glb", "-o", "o.png"],
         &dir,
-    ));
+        "o.png",
+    );
     assert!(
         e.contains("(198000 triangles)") && e.contains("work budget"),
         "{e}"
@@ -400,7 +380,6 @@ fn absurd_instance_counts_meet_the_work_budget() {
         "{:?}",
         start.elapsed()
     );
-    assert!(!dir.join("o.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -409,21 +388,21 @@ fn absurd_instance_counts_meet_the_work_budget() {
 #[test]
 fn compare_with_negative_tiny_and_huge_references() {
     let dir = tempdir("cmpref");
-    std::fs::write(dir.join("s.toml"), scene(|s| s)).unwrap();
+    write_scene(&dir, |s| s);
     write_exr(&dir.join("neg.exr"), 32, 24, |x, _| {
         if x == 3 { -0.5 } else { 0.1 }
     });
-    let e = error_line(&subsurface(
+    let e = refused(
         &["compare", "neg.exr", "s.toml", "-o", "o.png"],
         &dir,
-    ));
+        "o.png",
+    );
     assert!(
         e.contains(
             "neg.exr: pixel (3, 0) is [-0.5, -0.5, -0.5]: the reference must be finite and >= 0"
         ),
         "{e}"
     );
-    assert!(!dir.join("o.png").exists());
     if !gpu_available(&dir) {
         return;
     }
@@ -454,14 +433,10 @@ fn compare_with_negative_tiny_and_huge_references() {
 #[test]
 fn export_mitsuba_writes_round_trip_numbers() {
     let dir = tempdir("roundtrip");
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| {
-            s.replace("translation =", "mm_per_unit = 1e-3\ntranslation =")
-                + "medium = { sigma_a = [1e-8, 1e-8, 1e-8], sigma_s = [1e-8, 1e-8, 1e-8] }\n"
-        }),
-    )
-    .unwrap();
+    write_scene(&dir, |s| {
+        s.replace("translation =", "mm_per_unit = 1e-3\ntranslation =")
+            + "medium = { sigma_a = [1e-8, 1e-8, 1e-8], sigma_s = [1e-8, 1e-8, 1e-8] }\n"
+    });
     assert_success(&subsurface(
         &["export-mitsuba", "s.toml", "--out", "m"],
         &dir,
@@ -489,12 +464,11 @@ fn gltf_without_triangles_is_one_error_line() {
             &["render", "--model", file.as_str(), "-o", "o.png"][..],
             &["bench", "--model", file.as_str(), "--sizes", "32x24"],
         ] {
-            let e = error_line(&subsurface(args, &dir));
+            let e = refused(args, &dir, "o.png");
             assert!(
                 e.contains("no triangle mesh in the default scene (skipped 1 non-triangle"),
                 "{e}"
             );
-            assert!(!dir.join("o.png").exists());
         }
     }
     std::fs::remove_dir_all(&dir).ok();
@@ -506,11 +480,7 @@ fn gltf_without_triangles_is_one_error_line() {
 #[test]
 fn a_file_size_limit_fails_cleanly() {
     let dir = tempdir("fsize");
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| s.replace("segments = 16", "segments = 128")),
-    )
-    .unwrap();
+    write_scene(&dir, |s| s.replace("segments = 16", "segments = 128"));
     let limited = |cmd: &str| {
         Command::new("sh")
             .arg("-c")
@@ -529,11 +499,9 @@ fn a_file_size_limit_fails_cleanly() {
         "{e}: the output folder was left behind"
     );
     if gpu_available(&dir) {
-        std::fs::write(
-            dir.join("s.toml"),
-            scene(|s| s.replace("width = 32\nheight = 24", "width = 512\nheight = 512")),
-        )
-        .unwrap();
+        write_scene(&dir, |s| {
+            s.replace("width = 32\nheight = 24", "width = 512\nheight = 512")
+        });
         let e = error_line(&limited("render s.toml -o big.png"));
         assert!(e.contains("big.png: write failed"), "{e}");
         let left: Vec<_> = std::fs::read_dir(&dir)
@@ -550,13 +518,10 @@ fn a_file_size_limit_fails_cleanly() {
 #[cfg(target_os = "linux")]
 #[test]
 fn compare_writes_nothing_when_one_output_fails() {
-    let dir = tempdir("cmpfull");
-    if !gpu_available(&dir) {
+    let Some(dir) = compare_dir("cmpfull") else {
         return;
-    }
-    std::fs::write(dir.join("s.toml"), scene(|s| s)).unwrap();
-    write_exr(&dir.join("ref.exr"), 32, 24, |_, _| 0.1);
-    let e = error_line(&subsurface(
+    };
+    let e = refused(
         &[
             "compare",
             "ref.exr",
@@ -567,12 +532,9 @@ fn compare_writes_nothing_when_one_output_fails() {
             "/dev/full",
         ],
         &dir,
-    ));
-    assert!(e.contains("/dev/full: write failed"), "{e}");
-    assert!(
-        !dir.join("out.png").exists(),
-        "out.png written before the failure"
+        "out.png",
     );
+    assert!(e.contains("/dev/full: write failed"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -581,11 +543,9 @@ fn compare_writes_nothing_when_one_output_fails() {
 fn messages_name_the_file_and_explain_overflow() {
     let dir = tempdir("names");
     let lights = "[[lights]]\nkind = \"point\"\nposition = [0.0, 0.0, 0.2]\n".repeat(8);
-    std::fs::write(
-        dir.join("s.toml"),
-        scene(|s| s.replace("[[objects]]", &format!("{lights}[[objects]]"))),
-    )
-    .unwrap();
+    write_scene(&dir, |s| {
+        s.replace("[[objects]]", &format!("{lights}[[objects]]"))
+    });
     assert_refused_everywhere(
         &dir,
         "s.toml",
@@ -603,7 +563,7 @@ fn messages_name_the_file_and_explain_overflow() {
             "render.exposure_ev",
         ),
     ] {
-        std::fs::write(dir.join("s.toml"), scene(|s| s.replacen(from, to, 1))).unwrap();
+        write_scene(&dir, |s| s.replacen(from, to, 1));
         assert_refused_everywhere(
             &dir,
             "s.toml",
@@ -616,18 +576,15 @@ fn messages_name_the_file_and_explain_overflow() {
 /// Item 12: a region without skin pixels names the regions file.
 #[test]
 fn an_empty_region_names_the_regions_file() {
-    let dir = tempdir("region");
-    if !gpu_available(&dir) {
+    let Some(dir) = compare_dir("region") else {
         return;
-    }
-    std::fs::write(dir.join("s.toml"), scene(|s| s)).unwrap();
-    write_exr(&dir.join("ref.exr"), 32, 24, |_, _| 0.1);
+    };
     std::fs::write(
         dir.join("r.json"),
         r#"{"regions": [{"name": "bg", "rect": [0.0, 0.0, 0.05, 0.05]}]}"#,
     )
     .unwrap();
-    let e = error_line(&subsurface(
+    let e = refused(
         &[
             "compare",
             "ref.exr",
@@ -638,11 +595,11 @@ fn an_empty_region_names_the_regions_file() {
             "o.png",
         ],
         &dir,
-    ));
+        "o.png",
+    );
     assert_eq!(
         e,
         "error: r.json: regions[0] \"bg\": no skin pixels in its rectangle"
     );
-    assert!(!dir.join("o.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -277,6 +277,18 @@ fn buffer(
     })
 }
 
+/// A bind group `label` of `layout` whose binding 0 is a uniform buffer holding `data` (the
+/// group keeps the buffer alive).
+fn uniform_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    data: &[u8],
+) -> wgpu::BindGroup {
+    let uniform = buffer(device, label, data, wgpu::BufferUsages::UNIFORM);
+    util::bind_group(device, label, layout, [(0, uniform.as_entire_binding())])
+}
+
 /// Renders `scene` at `settings`' size; with `skin`, through the library's skin passes.
 pub fn render(
     ctx: &GpuContext,
@@ -327,17 +339,11 @@ pub fn render(
             ],
             sss: [world_per_mm(object), row as f32, 0.0, 0.0],
         };
-        let uniform = buffer(
-            device,
-            "material",
-            bytemuck::bytes_of(&data),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let material = util::bind_group(
+        let material = uniform_group(
             device,
             "material",
             &material_layout,
-            [(0, uniform.as_entire_binding())],
+            bytemuck::bytes_of(&data),
         );
         meshes.push(Mesh {
             vertices: buffer(
@@ -570,32 +576,16 @@ pub fn render(
             position: [0.0; 4],
             forward: [0.0; 4],
         };
-        let uniform = buffer(
-            device,
-            "shadow view",
-            bytemuck::bytes_of(&data),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let group = util::bind_group(
+        let group = uniform_group(
             device,
             "shadow view",
             &shadow_view_layout,
-            [(0, uniform.as_entire_binding())],
+            bytemuck::bytes_of(&data),
         );
         let target = util::layer_view(&shadow_depth, i as u32);
         let timer = TimedPass::begin(p, "shadow", &mut encoder);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow"),
-            color_attachments: &[],
-            depth_stencil_attachment: util::depth_attachment(
-                &target,
-                wgpu::LoadOp::Clear(1.0),
-                wgpu::StoreOp::Store,
-            ),
-            timestamp_writes: timer.writes(),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let clear = wgpu::LoadOp::Clear(1.0);
+        let mut pass = util::depth_pass(&mut encoder, "shadow", &target, clear, timer.writes());
         pass.set_viewport(0.0, 0.0, layer.size as f32, layer.size as f32, 0.0, 1.0);
         pass.set_scissor_rect(0, 0, layer.size, layer.size);
         pass.set_pipeline(&shadow_pipeline);
@@ -613,55 +603,58 @@ pub fn render(
             a: 1.0,
         })
     };
-    {
-        let timer = TimedPass::begin(p, "g-buffer", &mut encoder);
+    // The g-buffer, then the forward pass on its z-buffer: the objects drawn with the view's
+    // group, into `colors` and the z-buffer, loaded and stored as `z`.
+    let draw_objects = |encoder: &mut wgpu::CommandEncoder,
+                        label: &str,
+                        colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+                        z: wgpu::Operations<f32>,
+                        pipeline: &wgpu::RenderPipeline| {
+        let timer = TimedPass::begin(p, label, encoder);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("g-buffer"),
-            color_attachments: &[
-                util::color_attachment(&views[4], clear(0.0, 0.0, 0.0)),
-                util::color_attachment(&views[5], clear(0.0, 0.0, 0.0)),
-            ],
-            depth_stencil_attachment: util::depth_attachment(
-                &zview,
-                wgpu::LoadOp::Clear(1.0),
-                wgpu::StoreOp::Store,
-            ),
+            label: Some(label),
+            color_attachments: colors,
+            depth_stencil_attachment: util::depth_attachment(&zview, z.load, z.store),
             timestamp_writes: timer.writes(),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&gbuffer_pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &view_group, &[]);
         draw(&mut pass, &meshes);
         drop(pass);
-        timer.end(p, &mut encoder);
-    }
-    {
-        let far = scene.desc.camera.far;
-        let timer = TimedPass::begin(p, "forward", &mut encoder);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("forward"),
-            color_attachments: &[
-                util::color_attachment(&views[0], clear(bg[0], bg[1], bg[2])),
-                util::color_attachment(&views[1], clear(0.0, 0.0, 0.0)),
-                util::color_attachment(&views[2], clear(far, 0.0, 0.0)),
-                util::color_attachment(&views[3], wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
-            ],
-            depth_stencil_attachment: util::depth_attachment(
-                &zview,
-                wgpu::LoadOp::Load,
-                wgpu::StoreOp::Discard,
-            ),
-            timestamp_writes: timer.writes(),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&forward_pipeline);
-        pass.set_bind_group(0, &view_group, &[]);
-        draw(&mut pass, &meshes);
-        drop(pass);
-        timer.end(p, &mut encoder);
-    }
+        timer.end(p, encoder);
+    };
+    let black = || clear(0.0, 0.0, 0.0);
+    draw_objects(
+        &mut encoder,
+        "g-buffer",
+        &[
+            util::color_attachment(&views[4], black()),
+            util::color_attachment(&views[5], black()),
+        ],
+        wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        },
+        &gbuffer_pipeline,
+    );
+    let far = scene.desc.camera.far;
+    draw_objects(
+        &mut encoder,
+        "forward",
+        &[
+            util::color_attachment(&views[0], clear(bg[0], bg[1], bg[2])),
+            util::color_attachment(&views[1], black()),
+            util::color_attachment(&views[2], clear(far, 0.0, 0.0)),
+            util::color_attachment(&views[3], wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
+        ],
+        wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Discard,
+        },
+        &forward_pipeline,
+    );
 
     // The library's passes, on the program's textures. They are built here each frame for a
     // short program; an application builds them once and re-encodes them every frame.

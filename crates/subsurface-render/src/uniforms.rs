@@ -256,6 +256,14 @@ mod layout_tests {
         };
     }
 
+    /// [`assert_same`] for WGSL's `$name` and the Rust struct `$ty`, whose named fields are all
+    /// it has.
+    macro_rules! assert_layout {
+        ($name:literal, $ty:ident { $($f:ident),* $(,)? }) => {
+            assert_same($name, fields!($ty { $($f),* }), size_of::<$ty>())
+        };
+    }
+
     #[test]
     fn uniform_blocks_match_their_wgsl_declarations() {
         let viewport = offset_of!(CameraUniform, viewport);
@@ -274,57 +282,63 @@ mod layout_tests {
         ]
         .concat();
         assert_same("Camera", &camera, size_of::<CameraUniform>());
-        let light = fields!(LightUniform {
-            position,
-            kind,
-            direction,
-            first_layer,
-            color,
-            shadow_bias,
-            cos_outer,
-            cos_inner,
-            shadow_uv_scale,
-            atlas_texel,
-            view_proj,
-        });
-        assert_same("Light", light, size_of::<LightUniform>());
-        let lights = fields!(LightsUniform {
-            count,
-            transmittance,
-            thickness_filter,
-            thickness_view,
-            ambient,
-            normal_shrink,
-            sss_runs,
-            lateral_taps,
-            map_downsample,
-            bounce_layer,
-            bounce_ring,
-            bounce_cell_mm,
-            lights,
-        });
-        assert_same("Lights", lights, size_of::<LightsUniform>());
-        let object = fields!(ObjectUniform {
-            model,
-            normal_matrix,
-            albedo,
-            roughness,
-            specular,
-            sss_strength,
-            world_per_mm,
-            translucency,
-            has_albedo_map,
-            has_normal_map,
-            has_specular_map,
-            profile,
-            extinction,
-            lut_range_mm,
-            eta,
-            lateral_decay,
-            index,
-            reduced_scattering,
-            boundary_fit,
-        });
-        assert_same("Object", object, size_of::<ObjectUniform>());
+        assert_layout!(
+            "Light",
+            LightUniform {
+                position,
+                kind,
+                direction,
+                first_layer,
+                color,
+                shadow_bias,
+                cos_outer,
+                cos_inner,
+                shadow_uv_scale,
+                atlas_texel,
+                view_proj,
+            }
+        );
+        assert_layout!(
+            "Lights",
+            LightsUniform {
+                count,
+                transmittance,
+                thickness_filter,
+                thickness_view,
+                ambient,
+                normal_shrink,
+                sss_runs,
+                lateral_taps,
+                map_downsample,
+                bounce_layer,
+                bounce_ring,
+                bounce_cell_mm,
+                lights,
+            }
+        );
+        assert_layout!(
+            "Object",
+            ObjectUniform {
+                model,
+                normal_matrix,
+                albedo,
+                roughness,
+                specular,
+                sss_strength,
+                world_per_mm,
+                translucency,
+                has_albedo_map,
+                has_normal_map,
+                has_specular_map,
+                profile,
+                extinction,
+                lut_range_mm,
+                eta,
+                lateral_decay,
+                index,
+                reduced_scattering,
+                boundary_fit,
+            }
+        );
     }
 }

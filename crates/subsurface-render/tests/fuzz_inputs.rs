@@ -12,7 +12,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use common::{Rng, repo_root};
+use common::{Rng, fuzz_budget, named_in_order, repo_root};
 use subsurface_render::Scene;
 use subsurface_render::scene::{MeshDesc, SceneDesc, load_image};
 
@@ -20,21 +20,8 @@ const TIME_LIMIT: Duration = Duration::from_secs(5);
 
 /// The fixed replay's count, or a time budget and a fresh seed from the environment.
 fn plan(replay: usize) -> (usize, Option<Duration>, u64) {
-    match std::env::var("SUBSURFACE_FUZZ_SECONDS")
-        .ok()
-        .and_then(|s| s.parse::<f64>().ok())
-    {
-        Some(secs) => {
-            let seed = std::env::var("SUBSURFACE_FUZZ_SEED")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or_else(|| {
-                    std::time::SystemTime::now()
-                        .duration_since(std::time::UNIX_EPOCH)
-                        .map_or(7, |d| d.as_nanos() as u64)
-                });
-            (usize::MAX, Some(Duration::from_secs_f64(secs)), seed | 1)
-        }
+    match fuzz_budget() {
+        Some((budget, seed)) => (usize::MAX, Some(budget), seed),
         None => (replay, None, 0x51ed_270b_9a3c_44e1),
     }
 }
@@ -139,16 +126,12 @@ fn scene_seeds() -> Vec<(String, String)> {
         root.join("scenes/experiments"),
         corpus,
     ] {
-        let mut files: Vec<_> = std::fs::read_dir(dir)
+        let files: Vec<_> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().path())
             .filter(|p| p.extension().is_some_and(|e| e == "toml"))
             .collect();
-        files.sort();
-        for p in files {
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            seeds.push((name, std::fs::read_to_string(&p).unwrap()));
-        }
+        seeds.extend(named_in_order(files, |p| std::fs::read_to_string(p)));
     }
     seeds
 }

@@ -8,11 +8,13 @@
 //! `cargo test -p subsurface-render --test mesh_fuzz -- --ignored regenerate_corpus`
 //! rewrites the seed corpus from the builders in `mesh_util`.
 
+mod common;
 mod mesh_util;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use common::{Rng, fuzz_budget, named_in_order};
 use gltf::json::Value;
 use mesh_util::*;
 use subsurface_render::mesh::{BUILTIN_HAND_GLB, load_gltf_slice};
@@ -27,24 +29,6 @@ const MUTANTS_HAND: usize = 400;
 
 fn corpus_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz-corpus/gltf")
-}
-
-/// xorshift64*: tiny, deterministic, good enough to pick mutations.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<T: Copy>(&mut self, items: &[T]) -> T {
-        items[self.below(items.len())]
-    }
 }
 
 /// Numbers that sit on the loader's edges: zero, off-by-one, type limits, the budget and
@@ -398,14 +382,10 @@ fn check_model(m: &subsurface_render::mesh::GltfModel) -> Result<(), String> {
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut seeds = vec![("builtin-hand.glb".to_string(), BUILTIN_HAND_GLB.to_vec())];
-    let mut files: Vec<PathBuf> = std::fs::read_dir(corpus_dir())
+    let files: Vec<PathBuf> = std::fs::read_dir(corpus_dir())
         .map(|d| d.flatten().map(|e| e.path()).collect())
         .unwrap_or_default();
-    files.sort();
-    for f in files {
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
-        seeds.push((name, std::fs::read(&f).unwrap()));
-    }
+    seeds.extend(named_in_order(files, |p| std::fs::read(p)));
     seeds
 }
 
@@ -417,25 +397,6 @@ fn seeds_load() {
         let m = load_gltf_slice(bytes, name).unwrap_or_else(|e| panic!("{e}"));
         check_model(&m).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
-}
-
-/// `SUBSURFACE_FUZZ_SECONDS=N` turns the replay into a fuzzing run: mutants of every seed in
-/// turn, from a fresh random seed (`SUBSURFACE_FUZZ_SEED`, else the clock), until N seconds
-/// have passed (tools/fuzz.sh). Without it, the fixed replay below runs in `cargo test`.
-fn fuzz_budget() -> Option<(std::time::Duration, u64)> {
-    let secs: f64 = std::env::var("SUBSURFACE_FUZZ_SECONDS")
-        .ok()?
-        .parse()
-        .ok()?;
-    let seed = std::env::var("SUBSURFACE_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| {
-            std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(1, |d| d.as_nanos() as u64)
-        });
-    Some((std::time::Duration::from_secs_f64(secs), seed | 1))
 }
 
 #[test]
@@ -514,14 +475,10 @@ fn regenerate_corpus() {
     write("quad.gltf", quad.gltf());
     write("quad.glb", quad.glb());
 
-    let mut m = Model::quad();
-    let idx = m.view(&u16_bytes(&[2]));
-    let val = m.view(&f32_bytes(&[2., 2., 0.]));
-    m.json["accessors"][0]["sparse"] = v(&format!(
-        r#"{{"count":1,"indices":{{"bufferView":{idx},"componentType":5123}},
-        "values":{{"bufferView":{val}}}}}"#
-    ));
-    write("sparse.glb", m.glb());
+    write(
+        "sparse.glb",
+        Model::quad_sparse(&u16_bytes(&[2]), U16, &[2., 2., 0.]).glb(),
+    );
 
     let mut m = Model::quad();
     m.json["nodes"] = v(r#"[{"children":[1,2]},

@@ -25,6 +25,25 @@ fn set_quad_positions(m: &mut Model, p: &[f32; 12]) {
     m.bin[..48].copy_from_slice(&bytes);
 }
 
+/// Overwrites the six u16 indices at the end of [`Model::quad`]'s buffer.
+fn set_quad_indices(m: &mut Model, i: &[u16; 6]) {
+    let at = m.bin.len() - 12;
+    m.bin[at..].copy_from_slice(&u16_bytes(i));
+}
+
+/// [`Model::quad`] after `edit`, written as glTF or GLB by the ending of `name`, fails to load
+/// with an error naming each of `parts`.
+fn quad_err(name: &str, parts: &[&str], edit: impl FnOnce(&mut Model)) {
+    let mut m = Model::quad();
+    edit(&mut m);
+    let bytes = if name.ends_with(".glb") {
+        m.glb()
+    } else {
+        m.gltf()
+    };
+    expect_err(&bytes, name, parts);
+}
+
 #[test]
 fn valid_quad_loads_as_gltf_and_glb() {
     for (bytes, name) in [
@@ -226,13 +245,7 @@ fn index_budget_is_checked_before_reading() {
 
 #[test]
 fn valid_sparse_accessor_still_loads() {
-    let mut m = Model::quad();
-    let idx = m.view(&u16_bytes(&[2]));
-    let val = m.view(&f32_bytes(&[2., 2., 0.]));
-    m.json["accessors"][0]["sparse"] = v(&format!(
-        r#"{{"count":1,"indices":{{"bufferView":{idx},"componentType":5123}},
-        "values":{{"bufferView":{val}}}}}"#
-    ));
+    let m = Model::quad_sparse(&u16_bytes(&[2]), U16, &[2., 2., 0.]);
     let model = load_ok(&m.glb(), "sparse-ok.glb");
     assert_eq!(model.mesh.vertices[2].position, [2.0, 2.0, 0.0]);
 }
@@ -240,175 +253,155 @@ fn valid_sparse_accessor_still_loads() {
 #[test]
 fn bad_sparse_indices_are_errors() {
     for (indices, name) in [([2u32, 1], "order.glb"), ([1, 9], "range.glb")] {
-        let mut m = Model::quad();
-        let idx = m.view(&u32_bytes(&indices));
-        let val = m.view(&f32_bytes(&[2., 2., 0., 3., 3., 0.]));
-        m.json["accessors"][0]["sparse"] = v(&format!(
-            r#"{{"count":2,"indices":{{"bufferView":{idx},"componentType":5125}},
-            "values":{{"bufferView":{val}}}}}"#
-        ));
+        let m = Model::quad_sparse(&u32_bytes(&indices), U32, &[2., 2., 0., 3., 3., 0.]);
         expect_err(&m.glb(), name, &["POSITION accessor 0", "sparse index"]);
     }
     // Sparse values claimed beyond their view.
-    let mut m = Model::quad();
-    let idx = m.view(&u32_bytes(&[0, 1]));
-    let val = m.view(&f32_bytes(&[2., 2., 0.]));
-    m.json["accessors"][0]["sparse"] = v(&format!(
-        r#"{{"count":2,"indices":{{"bufferView":{idx},"componentType":5125}},
-        "values":{{"bufferView":{val}}}}}"#
-    ));
-    expect_err(
-        &m.glb(),
+    quad_err(
         "values.glb",
         &["POSITION accessor 0", "run past the end"],
+        |m| {
+            *m = Model::quad_sparse(&u32_bytes(&[0, 1]), U32, &[2., 2., 0.]);
+            m.json["accessors"][0]["sparse"]["count"] = 2.into();
+        },
     );
 }
 
 #[test]
 fn index_accessor_with_count_zero_is_an_error_not_unindexed() {
-    let mut m = Model::quad();
-    m.json["accessors"][3]["count"] = 0.into();
-    expect_err(&m.gltf(), "zero.gltf", &["index accessor 3", "count 0"]);
+    quad_err("zero.gltf", &["index accessor 3", "count 0"], |m| {
+        m.json["accessors"][3]["count"] = 0.into();
+    });
 }
 
 #[test]
 fn index_count_not_a_multiple_of_three_is_an_error() {
-    let mut m = Model::quad();
-    m.json["accessors"][3]["count"] = 5.into();
-    expect_err(
-        &m.gltf(),
+    quad_err(
         "five.gltf",
         &["index accessor 3", "count 5", "multiple of 3"],
+        |m| m.json["accessors"][3]["count"] = 5.into(),
     );
-    let mut m = Model::quad();
-    m.json["meshes"][0]["primitives"][0]
-        .as_object_mut()
-        .unwrap()
-        .remove("indices");
-    expect_err(
-        &m.gltf(),
+    quad_err(
         "noidx.gltf",
         &["POSITION accessor 0", "not indexed", "count 4"],
+        |m| {
+            let primitive = m.json["meshes"][0]["primitives"][0].as_object_mut();
+            primitive.unwrap().remove("indices");
+        },
     );
 }
 
 #[test]
 fn index_past_the_vertex_count_is_an_error() {
-    let mut m = Model::quad();
-    let at = m.bin.len() - 12;
-    m.bin[at..].copy_from_slice(&u16_bytes(&[0, 1, 2, 0, 2, 9]));
-    expect_err(
-        &m.glb(),
+    quad_err(
         "oob.glb",
         &["index accessor 3", "index 9", "vertex count 4"],
+        |m| set_quad_indices(m, &[0, 1, 2, 0, 2, 9]),
     );
 }
 
 #[test]
 fn index_accessor_past_its_buffer_is_an_error_not_unindexed() {
-    let mut m = Model::quad();
-    m.json["bufferViews"][3]["byteLength"] = 6.into();
-    expect_err(
-        &m.glb(),
+    quad_err(
         "short.glb",
         &["index accessor 3", "run past the end"],
+        |m| {
+            m.json["bufferViews"][3]["byteLength"] = 6.into();
+        },
     );
-    let mut m = Model::quad();
-    m.json["bufferViews"][3]["byteLength"] = 1000.into();
-    expect_err(
-        &m.glb(),
+    quad_err(
         "view.glb",
         &["index accessor 3", "does not fit in buffer 0"],
+        |m| m.json["bufferViews"][3]["byteLength"] = 1000.into(),
     );
-    let mut m = Model::quad();
-    m.json["accessors"][3]["byteOffset"] = v("18446744073709551000");
-    expect_err(&m.glb(), "offset.glb", &["index accessor 3"]);
+    quad_err("offset.glb", &["index accessor 3"], |m| {
+        m.json["accessors"][3]["byteOffset"] = v("18446744073709551000");
+    });
 }
 
 #[test]
 fn accessor_of_the_wrong_type_is_an_error() {
-    let mut m = Model::quad();
-    m.json["accessors"][3]["componentType"] = F32.into();
-    expect_err(
-        &m.glb(),
+    quad_err(
         "f32idx.glb",
         &["index accessor 3", "expected Scalar"],
+        |m| {
+            m.json["accessors"][3]["componentType"] = F32.into();
+        },
     );
-    let mut m = Model::quad();
-    m.json["accessors"][0]["type"] = v(r#""VEC2""#);
-    expect_err(
-        &m.glb(),
+    quad_err(
         "vec2pos.glb",
         &["POSITION accessor 0", "expected Vec3"],
+        |m| {
+            m.json["accessors"][0]["type"] = v(r#""VEC2""#);
+        },
     );
-    let mut m = Model::quad();
-    m.json["accessors"][2]["componentType"] = 5120.into(); // i8 UVs
-    expect_err(&m.glb(), "i8uv.glb", &["TEXCOORD_0 accessor 2"]);
+    // i8 UVs
+    quad_err("i8uv.glb", &["TEXCOORD_0 accessor 2"], |m| {
+        m.json["accessors"][2]["componentType"] = 5120.into();
+    });
 }
 
 #[test]
 fn stride_shorter_than_an_element_is_an_error() {
-    let mut m = Model::quad();
-    m.json["bufferViews"][0]["byteStride"] = 4.into();
-    expect_err(
-        &m.glb(),
+    quad_err(
         "stride.glb",
         &["POSITION accessor 0", "byteStride 4"],
+        |m| {
+            m.json["bufferViews"][0]["byteStride"] = 4.into();
+        },
     );
 }
 
 #[test]
 fn attribute_counts_must_match() {
-    let mut m = Model::quad();
-    m.json["accessors"][1]["count"] = 3.into();
-    expect_err(
-        &m.glb(),
+    quad_err(
         "counts.glb",
         &["NORMAL accessor 1", "3 elements", "has 4"],
+        |m| m.json["accessors"][1]["count"] = 3.into(),
     );
 }
 
 #[test]
 fn missing_position_accessor_is_an_error_not_a_panic() {
-    let mut m = Model::quad();
-    m.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99.into();
-    expect_err(
-        &m.gltf(),
+    quad_err(
         "pos99.gltf",
         &["POSITION accessor 99 does not exist"],
+        |m| {
+            m.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99.into();
+        },
     );
 }
 
 #[test]
 fn non_finite_positions_are_errors() {
     for (bad, name) in [(f32::NAN, "nan.glb"), (f32::INFINITY, "inf.glb")] {
-        let mut m = Model::quad();
-        set_quad_positions(&mut m, &[0., 0., 0., bad, 0., 0., 1., 1., 0., 0., 1., 0.]);
-        expect_err(
-            &m.glb(),
+        quad_err(
             name,
             &["POSITION accessor 0", "vertex 1", "not finite"],
+            |m| {
+                set_quad_positions(m, &[0., 0., 0., bad, 0., 0., 1., 1., 0., 0., 1., 0.]);
+            },
         );
     }
-    let mut m = Model::quad();
-    set_quad_positions(&mut m, &[f32::NAN; 12]);
-    expect_err(&m.glb(), "allnan.glb", &["POSITION accessor 0", "vertex 0"]);
+    quad_err("allnan.glb", &["POSITION accessor 0", "vertex 0"], |m| {
+        set_quad_positions(m, &[f32::NAN; 12]);
+    });
 }
 
 #[test]
 fn transform_overflowing_to_infinity_is_an_error() {
-    let mut m = Model::quad();
-    m.json["nodes"] = v(r#"[{"children":[1],"scale":[1e30,1e30,1e30]},
-        {"mesh":0,"scale":[1e30,1e30,1e30]}]"#);
-    expect_err(&m.glb(), "huge.glb", &["node 1", "not finite after"]);
+    quad_err("huge.glb", &["node 1", "not finite after"], |m| {
+        m.json["nodes"] = v(r#"[{"children":[1],"scale":[1e30,1e30,1e30]},
+            {"mesh":0,"scale":[1e30,1e30,1e30]}]"#);
+    });
 }
 
 #[test]
 fn non_finite_uvs_are_errors() {
-    let mut m = Model::quad();
-    let at = 96; // positions (48) + normals (48)
-    m.bin[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
-    expect_err(&m.glb(), "uv.glb", &["TEXCOORD_0 accessor 2", "element 0"]);
+    quad_err("uv.glb", &["TEXCOORD_0 accessor 2", "element 0"], |m| {
+        let at = 96; // positions (48) + normals (48)
+        m.bin[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    });
 }
 
 /// Normals derive from positions, so non-finite ones are recomputed (with a warning).
@@ -425,25 +418,24 @@ fn non_finite_normals_are_recomputed() {
 
 #[test]
 fn zero_extent_models_are_errors() {
-    let mut m = Model::quad();
-    set_quad_positions(&mut m, &[0.5; 12]);
-    expect_err(&m.glb(), "point.glb", &["has zero extent"]);
-    let mut m = Model::quad();
-    m.json["nodes"][0]["scale"] = v("[0,0,0]");
-    expect_err(&m.glb(), "scale0.glb", &["has zero extent"]);
+    quad_err("point.glb", &["has zero extent"], |m| {
+        set_quad_positions(m, &[0.5; 12]);
+    });
+    quad_err("scale0.glb", &["has zero extent"], |m| {
+        m.json["nodes"][0]["scale"] = v("[0,0,0]");
+    });
 }
 
 #[test]
 fn zero_area_triangles_are_dropped() {
     let mut m = Model::quad();
-    let at = m.bin.len() - 12;
-    m.bin[at..].copy_from_slice(&u16_bytes(&[0, 1, 2, 0, 0, 1]));
+    set_quad_indices(&mut m, &[0, 1, 2, 0, 0, 1]);
     let model = load_ok(&m.glb(), "degenerate.glb");
     assert_eq!(model.mesh.indices, vec![0, 1, 2]);
     // Collinear positions: the model has extent but nothing to draw.
-    let mut m = Model::quad();
-    set_quad_positions(&mut m, &[0., 0., 0., 1., 0., 0., 2., 0., 0., 3., 0., 0.]);
-    expect_err(&m.glb(), "line.glb", &["all 2 triangles have zero area"]);
+    quad_err("line.glb", &["all 2 triangles have zero area"], |m| {
+        set_quad_positions(m, &[0., 0., 0., 1., 0., 0., 2., 0., 0., 3., 0., 0.]);
+    });
 }
 
 #[test]

@@ -28,18 +28,8 @@ fn distances(ctx: &GpuContext, pass: &ShadowEntryPass, depth: &wgpu::Texture) ->
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     {
         let view = util::layer_view(depth, 0);
-        let _clear = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("caller's shadow map"),
-            color_attachments: &[],
-            depth_stencil_attachment: util::depth_attachment(
-                &view,
-                wgpu::LoadOp::Clear(0.5),
-                wgpu::StoreOp::Store,
-            ),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let clear = wgpu::LoadOp::Clear(0.5);
+        util::depth_pass(&mut encoder, "caller's shadow map", &view, clear, None);
     }
     pass.encode(&mut encoder, None);
     ctx.queue.submit([encoder.finish()]);

@@ -387,11 +387,8 @@ fn no_transmittance_where_the_surface_faces_the_light() {
     assert!(n > 500, "slab covers {n} pixels");
     // The same slab lit from behind does transmit (1 mm of skin passes most red light).
     let (back, _) = render_diffuse(&backlit(slab, 1024), 64, 64, TransmittanceMethod::Paper);
-    assert!(
-        back[32 * 64 + 32][0] > 0.3,
-        "backlit: {:?}",
-        back[32 * 64 + 32]
-    );
+    let centre = back[32 * 64 + 32];
+    assert!(centre[0] > 0.3, "backlit: {centre:?}");
 }
 
 /// `diffusion`: a 6 mm slab of skin lit from behind passes what exact transport says a 6 mm
@@ -578,11 +575,8 @@ fn thin_slab_passes_unscattered_light_in_a_lobe_of_the_boundary_roughness() {
         "lobe at 0.069 rad",
     );
     let paper = specular(&s, TransmittanceMethod::Paper);
-    assert!(
-        paper[32 * 64 + 32][0].abs() < 1e-6,
-        "{:?}",
-        paper[32 * 64 + 32]
-    );
+    let centre = paper[32 * 64 + 32];
+    assert!(centre[0].abs() < 1e-6, "{centre:?}");
 }
 
 /// The unscattered lobe widens toward grazing incidence: a facet tilt d turns the refracted ray

@@ -3,7 +3,6 @@
 //! the edge, where nothing changes, leaves a curve smooth enough to judge a blur's width
 //! against a noisy path-traced reference, which pixel errors and region means cannot.
 
-use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::plot;
@@ -140,18 +139,13 @@ pub fn draw(root: &plot::Area, e: &EdgeResult, title: &str) -> plot::DrawResult 
             .into_iter()
             .fold(1e-12, f64::max)
     });
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..x_max, -0.05..1.25)?;
-    chart
-        .configure_mesh()
-        .x_desc("position across the edge (mm)")
-        .y_desc("radiance / reference's lit plateau")
-        .label_style(("sans-serif", 14))
-        .draw()?;
+    let mut chart =
+        plot::chart_builder(root, title, 60).build_cartesian_2d(0.0..x_max, -0.05..1.25)?;
+    let (x_desc, y_desc) = (
+        "position across the edge (mm)",
+        "radiance / reference's lit plateau",
+    );
+    plot::axes(&mut chart, x_desc, y_desc, false)?;
     for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let pts = |curve: &[[f32; 3]]| -> Vec<(f64, f64)> {
             e.position_mm

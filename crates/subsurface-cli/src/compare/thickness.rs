@@ -128,19 +128,10 @@ pub fn draw(root: &plot::Area, t: &ThicknessResult, title: &str) -> plot::DrawRe
     };
     let y_max = all().fold(1e-9, f64::max) * 2.0;
     let y_min = (all().filter(|v| *v > 0.0).fold(y_max, f64::min) * 0.5).max(y_max * 1e-6);
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+    let mut chart = plot::chart_builder(root, title, 70)
         .build_cartesian_2d(0.0..x_max, (y_min..y_max).log_scale())?;
-    chart
-        .configure_mesh()
-        .x_desc("thickness the light crosses (mm)")
-        .y_desc("mean radiance")
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style(("sans-serif", 14))
-        .draw()?;
+    let x_desc = "thickness the light crosses (mm)";
+    plot::axes(&mut chart, x_desc, "mean radiance", true)?;
     for (c, color) in plot::CHANNEL_COLORS.into_iter().enumerate() {
         let pts = |f: fn(&ThicknessBin) -> [f32; 3]| -> Vec<(f64, f64)> {
             t.bins

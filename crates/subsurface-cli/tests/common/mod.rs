@@ -93,6 +93,50 @@ pub fn gpu_available(dir: &Path) -> bool {
     out.status.success() || skip(&format!("no GPU adapter: {}", text(&out)))
 }
 
+/// A scratch directory (see [`tempdir`]) for a test that needs a GPU adapter; None when the
+/// test is skipped (see [`gpu_available`]).
+pub fn gpu_tempdir(name: &str) -> Option<PathBuf> {
+    let dir = tempdir(name);
+    gpu_available(&dir).then_some(dir)
+}
+
+/// Runs `subsurface ARGS` in `dir`, which must fail with one error line (see [`error_line`])
+/// and leave no `output` behind; returns that line.
+pub fn refused(args: &[&str], dir: &Path, output: &str) -> String {
+    let e = error_line(&subsurface(args, dir));
+    assert!(!dir.join(output).exists(), "{e}: {output} written");
+    e
+}
+
+/// A grey RGB float EXR of `w` x `h` pixels, `f(x, y)` in every channel.
+pub fn write_exr(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) {
+    image::Rgb32FImage::from_fn(w, h, |x, y| image::Rgb([f(x, y); 3]))
+        .save(path)
+        .unwrap();
+}
+
+/// A 32x24 scene: the camera 0.2 in front of (0.025, 0.025, 0), a spot light beside it aimed
+/// at the origin with the `key = value` lines of `light` added, and one object given by the
+/// lines of `object` (its `mesh = ...` first).
+pub fn scene_toml(light: &str, object: &str) -> String {
+    format!(
+        r#"[camera]
+position = [0.025, 0.025, 0.2]
+target = [0.025, 0.025, 0.0]
+[render]
+width = 32
+height = 24
+[[lights]]
+kind = "spot"
+position = [0.0, 0.0, 0.2]
+shadow_map_size = 64
+{light}
+[[objects]]
+{object}
+"#
+    )
+}
+
 /// Asserts that `bytes` are one whole PNG and nothing else: the signature first, the IEND
 /// chunk last (a summary line printed to the same stream would break either).
 pub fn assert_whole_png(bytes: &[u8]) {

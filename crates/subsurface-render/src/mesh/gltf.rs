@@ -330,9 +330,15 @@ fn load_image(
         .ok_or_else(|| err(format!("unsupported format {:?}", data.format)))
 }
 
+// The integration tests' encoder, so that both kinds of test share one copy.
+#[cfg(test)]
+#[path = "../../tests/mesh_util/base64.rs"]
+mod base64;
+
 #[cfg(test)]
 mod tests {
     use super::super::test_util::check_mesh;
+    use super::base64::base64_encode;
     use super::*;
 
     #[test]
@@ -443,22 +449,5 @@ mod tests {
         assert_eq!(m.vertices[2].position, [1.0, 4.0, 3.0]);
         assert_eq!(m.vertices[0].normal, [0.0, 0.0, 1.0]);
         assert_eq!(model.base_color_factor, [1.0; 4]);
-    }
-
-    fn base64_encode(data: &[u8]) -> String {
-        const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        let mut s = String::new();
-        for c in data.chunks(3) {
-            let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-            let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-            for k in 0..4 {
-                if k <= c.len() {
-                    s.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
-                } else {
-                    s.push('=');
-                }
-            }
-        }
-        s
     }
 }

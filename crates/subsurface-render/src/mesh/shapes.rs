@@ -289,13 +289,18 @@ mod tests {
         assert!((volume(&m) - 3.0).abs() < 1e-4);
     }
 
+    /// Checks `m` (see [`check_mesh`]) and that its bounds are `-half..half` to float precision.
+    fn check_centred(m: &Mesh, half: Vec3) {
+        check_mesh(m);
+        let (lo, hi) = m.bounds();
+        assert!((lo + half).abs().max_element() < 1e-6, "{lo}");
+        assert!((hi - half).abs().max_element() < 1e-6, "{hi}");
+    }
+
     #[test]
     fn wedge_shape() {
         let m = Mesh::wedge(0.1, 0.04, 0.02);
-        check_mesh(&m);
-        let (lo, hi) = m.bounds();
-        assert!((lo - Vec3::new(-0.05, -0.02, -0.01)).abs().max_element() < 1e-6);
-        assert!((hi - Vec3::new(0.05, 0.02, 0.01)).abs().max_element() < 1e-6);
+        check_centred(&m, Vec3::new(0.05, 0.02, 0.01));
         // Volume of the prism: 0.5 * length * max_thickness * height.
         assert!((volume(&m) - 0.5 * 0.1 * 0.02 * 0.04).abs() < 1e-9);
         // Thickness at x=-L/2 is 0: every vertex at x=-L/2 has z=0.
@@ -309,10 +314,7 @@ mod tests {
     #[test]
     fn cylinder_shape() {
         let m = Mesh::cylinder(0.5, 3.0, 64);
-        check_mesh(&m);
-        let (lo, hi) = m.bounds();
-        assert!((lo - Vec3::new(-0.5, -1.5, -0.5)).abs().max_element() < 1e-6);
-        assert!((hi - Vec3::new(0.5, 1.5, 0.5)).abs().max_element() < 1e-6);
+        check_centred(&m, Vec3::new(0.5, 1.5, 0.5));
         // The inscribed 64-gon prism: pi r^2 L sin(2 pi / 64) / (2 pi / 64).
         let exact = std::f32::consts::PI * 0.25 * 3.0;
         let polygon = exact * (std::f32::consts::TAU / 64.0).sin() / (std::f32::consts::TAU / 64.0);

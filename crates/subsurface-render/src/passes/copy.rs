@@ -59,14 +59,12 @@ impl CopyPass {
     ) {
         let timer = TimedPass::begin(profiler, "copy", encoder);
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("copy"),
-                color_attachments: &[util::color_attachment(&self.target, wgpu::LoadOp::Load)],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::color_pass(
+                encoder,
+                "copy",
+                &[util::color_attachment(&self.target, wgpu::LoadOp::Load)],
+                timer.writes(),
+            );
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.draw(0..3, 0..1);

@@ -181,14 +181,12 @@ impl ToneMapPass {
             } else {
                 wgpu::LoadOp::Clear(wgpu::Color::BLACK)
             };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("tonemap"),
-                color_attachments: &[util::color_attachment(output, load)],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::color_pass(
+                encoder,
+                "tonemap",
+                &[util::color_attachment(output, load)],
+                timer.writes(),
+            );
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             if let Some([x, y, w, h]) = scissor {

@@ -397,6 +397,43 @@ pub fn depth_attachment(
     })
 }
 
+/// A render pass `label` drawing into `colors` only (no depth), timed by `timestamp_writes`:
+/// the image passes.
+pub fn color_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: colors,
+        depth_stencil_attachment: None,
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+/// A render pass `label` with no colour target, writing depth to `view` after `load`, timed by
+/// `timestamp_writes`: a shadow map drawn, or one cleared.
+pub fn depth_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: depth_attachment(view, load, wgpu::StoreOp::Store),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 /// What differs between the passes that draw the objects once per shadow layer into that
 /// layer of an array atlas (the shadow maps and the translucent shadow maps).
 pub struct LayeredPassDesc<'a> {

@@ -140,19 +140,7 @@ pub fn upload_texture_with(
     bytes: &[u8],
     extra: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    let t = util::texture_2d(
-        &ctx.device,
-        "test input",
-        w,
-        h,
-        1,
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST
-            | extra,
-    );
+    let t = util::render_target_with(&ctx.device, "test input", w, h, format, extra);
     let texel = format.block_copy_size(None).unwrap();
     ctx.queue.write_texture(
         t.as_image_copy(),
@@ -224,6 +212,40 @@ impl Rng {
     pub fn pick<T: Copy>(&mut self, items: &[T]) -> T {
         items[self.below(items.len())]
     }
+}
+
+/// `paths` in name order, each as (file name, `read` of the file): fuzzing seeds, whose order
+/// fixes what the seeded mutations do.
+pub fn named_in_order<T>(
+    mut paths: Vec<PathBuf>,
+    read: impl Fn(&Path) -> std::io::Result<T>,
+) -> Vec<(String, T)> {
+    paths.sort();
+    paths
+        .into_iter()
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, read(&p).unwrap())
+        })
+        .collect()
+}
+
+/// `SUBSURFACE_FUZZ_SECONDS=N` turns a fixed replay into a fuzzing run: the time budget and a
+/// fresh odd seed (`SUBSURFACE_FUZZ_SEED`, else the clock), for tools/fuzz.sh. None without it.
+pub fn fuzz_budget() -> Option<(std::time::Duration, u64)> {
+    let secs: f64 = std::env::var("SUBSURFACE_FUZZ_SECONDS")
+        .ok()?
+        .parse()
+        .ok()?;
+    let seed = std::env::var("SUBSURFACE_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(1, |d| d.as_nanos() as u64)
+        });
+    Some((std::time::Duration::from_secs_f64(secs), seed | 1))
 }
 
 pub fn repo_root() -> PathBuf {
@@ -321,4 +343,52 @@ pub fn percentile(values: &[f32], q: f32) -> f32 {
     let mut v = values.to_vec();
     v.sort_by(f32::total_cmp);
     v[((v.len() - 1) as f32 * q) as usize]
+}
+
+/// The frame `r` draws after `update(scene, opts)`, and the frame a new renderer draws from the
+/// same scene and options.
+pub fn update_and_fresh(
+    ctx: &GpuContext,
+    r: &mut subsurface_render::Renderer,
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> (image::RgbaImage, image::RgbaImage) {
+    r.update(scene, opts).unwrap();
+    let updated = r.render().unwrap().image;
+    let fresh = subsurface_render::Renderer::new(ctx, scene, opts.clone())
+        .unwrap()
+        .render()
+        .unwrap()
+        .image;
+    (updated, fresh)
+}
+
+/// [`update_and_fresh`], asserting that the two images are the same (`what` names the edit);
+/// the image.
+pub fn update_matches_fresh(
+    ctx: &GpuContext,
+    r: &mut subsurface_render::Renderer,
+    scene: &Scene,
+    opts: &RenderOptions,
+    what: &str,
+) -> image::RgbaImage {
+    let (updated, fresh) = update_and_fresh(ctx, r, scene, opts);
+    assert!(
+        updated == fresh,
+        "{what}: update() and a new Renderer differ"
+    );
+    fresh
+}
+
+/// Updates `r` to `scene` and `opts` and asserts that it renders `image` again (`what` names
+/// the edit).
+pub fn assert_update_gives(
+    r: &mut subsurface_render::Renderer,
+    scene: &Scene,
+    opts: &RenderOptions,
+    image: &image::RgbaImage,
+    what: &str,
+) {
+    r.update(scene, opts).unwrap();
+    assert!(r.render().unwrap().image == *image, "{what}");
 }

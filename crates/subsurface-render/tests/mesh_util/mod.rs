@@ -30,22 +30,9 @@ pub fn u32_bytes(v: &[u32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-pub fn base64_encode(data: &[u8]) -> String {
-    const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for c in data.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            if k <= c.len() {
-                s.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                s.push('=');
-            }
-        }
-    }
-    s
-}
+// Shared with the loader's unit tests (src/mesh/gltf.rs), which cannot reach this module.
+mod base64;
+pub use base64::base64_encode;
 
 /// Component types, as glTF numbers them.
 pub const U8: u32 = 5121;
@@ -90,6 +77,20 @@ impl Model {
         m.attribute("TEXCOORD_0", &f32_bytes(&uv), F32, 4, "VEC2");
         let i = m.accessor(&u16_bytes(&[0, 1, 2, 0, 2, 3]), U16, 6, "SCALAR");
         m.json["meshes"][0]["primitives"][0]["indices"] = i.into();
+        m
+    }
+
+    /// [`Model::quad`] with a sparse accessor on POSITION: the vertices at `indices` (of
+    /// `component` type) move to the positions `values`, three floats each.
+    pub fn quad_sparse(indices: &[u8], component: u32, values: &[f32]) -> Model {
+        let mut m = Model::quad();
+        let idx = m.view(indices);
+        let val = m.view(&f32_bytes(values));
+        let count = values.len() / 3;
+        m.json["accessors"][0]["sparse"] = v(&format!(
+            r#"{{"count":{count},"indices":{{"bufferView":{idx},"componentType":{component}}},
+            "values":{{"bufferView":{val}}}}}"#
+        ));
         m
     }
 

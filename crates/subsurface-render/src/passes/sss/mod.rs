@@ -640,14 +640,12 @@ impl SssPass {
                     attach(&bound.targets[4.min(bound.targets.len() - 1)]),
                 ];
                 let single = [attach(&bound.targets[s.target])];
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("sss"),
-                    color_attachments: if s.accum { &accum_target } else { &single },
-                    depth_stencil_attachment: None,
-                    timestamp_writes: timer.writes(),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                let mut pass = util::color_pass(
+                    encoder,
+                    "sss",
+                    if s.accum { &accum_target } else { &single },
+                    timer.writes(),
+                );
                 pass.set_scissor_rect(x0, y0, w, h);
                 pass.set_pipeline(self.pipelines.render(s.key));
                 pass.set_bind_group(0, &s.bind_group, &[]);

@@ -225,14 +225,8 @@ impl TextureBlur {
                     .iter()
                     .map(|v| util::color_attachment(v, wgpu::LoadOp::Load))
                     .collect();
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("texture-space blur"),
-                    color_attachments: &attachments,
-                    depth_stencil_attachment: None,
-                    timestamp_writes: timer.writes(),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                let mut pass =
+                    util::color_pass(encoder, "texture-space blur", &attachments, timer.writes());
                 pass.set_pipeline(self.pipeline(s.stage));
                 pass.set_bind_group(0, &s.bind_group, &[]);
                 pass.draw(0..3, 0..1);

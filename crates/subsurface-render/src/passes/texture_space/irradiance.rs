@@ -75,14 +75,12 @@ impl IrradiancePass {
         {
             let attach =
                 |v| util::color_attachment(v, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("texture-space irradiance"),
-                color_attachments: &[attach(&targets[0]), attach(&targets[1])],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::color_pass(
+                encoder,
+                "texture-space irradiance",
+                &[attach(&targets[0]), attach(&targets[1])],
+                timer.writes(),
+            );
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, lighting.frame_bind_group(), &[]);
             pass.set_bind_group(2, maps, &[]);
