@@ -405,10 +405,22 @@ pub fn color_pass<'e>(
     colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
+    render_pass(encoder, label, colors, None, timestamp_writes)
+}
+
+/// A render pass `label` into `colors` and `depth` ([`depth_attachment`]), timed by
+/// `timestamp_writes`: what every pass of the renderer begins with.
+pub fn render_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: colors,
-        depth_stencil_attachment: None,
+        depth_stencil_attachment: depth,
         timestamp_writes,
         occlusion_query_set: None,
         multiview_mask: None,
@@ -424,14 +436,13 @@ pub fn depth_pass<'e>(
     load: wgpu::LoadOp<f32>,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[],
-        depth_stencil_attachment: depth_attachment(view, load, wgpu::StoreOp::Store),
+    render_pass(
+        encoder,
+        label,
+        &[],
+        depth_attachment(view, load, wgpu::StoreOp::Store),
         timestamp_writes,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    })
+    )
 }
 
 /// What differs between the passes that draw the objects once per shadow layer into that
@@ -616,13 +627,14 @@ impl LayeredPass {
         for layer in &self.layers {
             let timer = TimedPass::begin(profiler, self.label, encoder);
             {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(self.label),
-                    color_attachments: &[color_attachment(
+                let mut pass = render_pass(
+                    encoder,
+                    self.label,
+                    &[color_attachment(
                         &layer.target,
                         wgpu::LoadOp::Clear(self.clear),
                     )],
-                    depth_stencil_attachment: depth_attachment(
+                    depth_attachment(
                         &layer.depth,
                         wgpu::LoadOp::Clear(1.0),
                         if self.depth_view.is_some() {
@@ -631,10 +643,8 @@ impl LayeredPass {
                             wgpu::StoreOp::Discard
                         },
                     ),
-                    timestamp_writes: timer.writes(),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                    timer.writes(),
+                );
                 let size = layer.size;
                 pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
                 pass.set_scissor_rect(0, 0, size, size);

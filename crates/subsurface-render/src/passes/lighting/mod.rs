@@ -375,18 +375,13 @@ impl LightingPass {
     ) {
         let timer = TimedPass::begin(profiler, timed, encoder);
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("depth prepass"),
-                color_attachments: &[],
-                depth_stencil_attachment: util::depth_attachment(
-                    zbuffer,
-                    wgpu::LoadOp::Clear(1.0),
-                    wgpu::StoreOp::Store,
-                ),
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::render_pass(
+                encoder,
+                "depth prepass",
+                &[],
+                util::depth_attachment(zbuffer, wgpu::LoadOp::Clear(1.0), wgpu::StoreOp::Store),
+                timer.writes(),
+            );
             util::draw_objects(
                 &mut pass,
                 &self.prepass,
@@ -450,9 +445,10 @@ impl LightingPass {
         );
         let timer = TimedPass::begin(profiler, "lighting", encoder);
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("lighting"),
-                color_attachments: &[
+            let mut pass = util::render_pass(
+                encoder,
+                "lighting",
+                &[
                     attach(&diffuse, bg),
                     attach(&specular, wgpu::Color::TRANSPARENT),
                     attach(
@@ -466,15 +462,13 @@ impl LightingPass {
                     ),
                     attach(&sss, wgpu::Color::TRANSPARENT),
                 ],
-                depth_stencil_attachment: util::depth_attachment(
+                util::depth_attachment(
                     &targets.zbuffer,
                     wgpu::LoadOp::Load,
                     wgpu::StoreOp::Discard,
                 ),
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+                timer.writes(),
+            );
             pass.set_bind_group(3, &targets.screen, &[]);
             self.draw_lit_objects(&mut pass, objects, maps);
         }

@@ -166,9 +166,10 @@ impl ShadowEntryPass {
         for layer in &self.layers {
             let timer = TimedPass::begin(profiler, "shadow entry", encoder);
             {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("shadow entry"),
-                    color_attachments: &[util::color_attachment(
+                let mut pass = util::render_pass(
+                    encoder,
+                    "shadow entry",
+                    &[util::color_attachment(
                         &layer.target,
                         wgpu::LoadOp::Clear(wgpu::Color {
                             r: f32::MAX as f64,
@@ -177,11 +178,9 @@ impl ShadowEntryPass {
                             a: 0.0,
                         }),
                     )],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: timer.writes(),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                    None,
+                    timer.writes(),
+                );
                 pass.set_viewport(0.0, 0.0, layer.size as f32, layer.size as f32, 0.0, 1.0);
                 pass.set_scissor_rect(0, 0, layer.size, layer.size);
                 pass.set_pipeline(&self.pipeline);

@@ -262,14 +262,13 @@ impl TransmittedLightPass {
         let timer = TimedPass::begin(profiler, "transmitted light", encoder);
         {
             let load = |v| util::color_attachment(v, wgpu::LoadOp::Load);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("transmitted light"),
-                color_attachments: &[load(diffuse), load(specular)],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::render_pass(
+                encoder,
+                "transmitted light",
+                &[load(diffuse), load(specular)],
+                None,
+                timer.writes(),
+            );
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, frame, &[]);
             pass.set_bind_group(2, gbuffer, &[]);

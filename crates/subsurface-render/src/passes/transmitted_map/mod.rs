@@ -365,11 +365,12 @@ impl TransmittedMapPass {
                     util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT))
                 })
                 .collect();
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(map_pass.timed),
-                color_attachments: &attachments,
+            let mut pass = util::render_pass(
+                encoder,
+                map_pass.timed,
+                &attachments,
                 // Kept: the next pass shades the surfaces this one found nearest.
-                depth_stencil_attachment: util::depth_attachment(
+                util::depth_attachment(
                     &map.zbuffer,
                     if map_pass.first {
                         wgpu::LoadOp::Clear(1.0)
@@ -378,10 +379,8 @@ impl TransmittedMapPass {
                     },
                     wgpu::StoreOp::Store,
                 ),
-                timestamp_writes: timer.writes(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+                timer.writes(),
+            );
             util::draw_objects(
                 &mut pass,
                 map_pass.pipeline,

@@ -1,0 +1,105 @@
+//! Guard on the generated fidelity suite (issue 39): every suite scene with a committed
+//! path-traced reference is rendered with the defaults, as `tools/reference/suite.py report`
+//! does, and each counted region's error must stay where the committed report recorded it
+//! (references/suite/report.json). The canonical scenes have their own guard (fidelity.rs);
+//! this one covers the media, shapes and light directions nobody tuned on (the held-out
+//! third) as well as the rest, so that a change that helps the canonical scenes and hurts
+//! the suite fails here.
+//!
+//! When the renderer's image changes on purpose, re-run `suite.py report` (docs/lab/suite.md)
+//! and commit the new report with the change.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+/// How far a counted region's relative error may move from its record: the renderer is
+/// deterministic on one adapter, so this only absorbs other adapters' rounding.
+const DRIFT: f64 = 0.02;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `subsurface compare --json` of suite scene `name` with the defaults, run from the
+/// repository root (the scene files name their paths from there).
+fn compare(name: &str, out: &Path) -> serde_json::Value {
+    let [reference, scene, regions] = [
+        format!("references/suite/{name}.exr"),
+        format!("scenes/suite/{name}.toml"),
+        format!("scenes/suite/{name}.regions.json"),
+    ];
+    let out = out.to_str().unwrap();
+    let args = [
+        "compare",
+        &reference,
+        &scene,
+        "--regions",
+        &regions,
+        "--json",
+        "--out",
+        out,
+    ];
+    let o = common::subsurface(&args, &root());
+    assert!(o.status.success(), "{name}: {}", common::text(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn suite_regions_stay_where_the_report_recorded_them() {
+    let Some(tmp) = common::gpu_tempdir("suite-guard") else {
+        return;
+    };
+    let text = std::fs::read_to_string(root().join("references/suite/report.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let stderr_max = report["stderr_max"].as_f64().unwrap();
+    let head = std::env::var_os("SUBSURFACE_ASSETS")
+        .is_some_and(|d| Path::new(&d).join("LeePerrySmith").is_dir());
+    let (mut checked, mut within, mut drifted) = (0, 0, Vec::new());
+    for (name, scene) in report["scenes"].as_object().unwrap() {
+        if name.starts_with("head--") && !head {
+            eprintln!("{name}: skipped, the head model is not in SUBSURFACE_ASSETS");
+            continue;
+        }
+        let now = compare(name, &tmp.join("x.png"));
+        let recorded = &scene["configs"]["default"]["regions"];
+        for (region, rec) in recorded.as_object().unwrap() {
+            let stderr = rec["stderr"].as_f64().unwrap();
+            let Some(want) = rec["error"].as_f64() else {
+                continue; // a black reference region has no relative error
+            };
+            if stderr > stderr_max {
+                continue; // left out of the report's counts as noise
+            }
+            let got = now["regions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|r| r["name"] == region.as_str())
+                .and_then(|r| r["rel_error"].as_f64())
+                .unwrap_or_else(|| panic!("{name}: region {region} missing"));
+            checked += 1;
+            within += usize::from(got.abs() <= 0.25);
+            if (got - want).abs() > DRIFT {
+                drifted.push(format!("{name} {region}: {want:+.3} -> {got:+.3}"));
+            }
+        }
+    }
+    eprintln!("{checked} counted regions, {within} within +-25 %");
+    assert!(
+        drifted.is_empty(),
+        "regions moved from the committed report (re-run suite.py report if on purpose):\n{}",
+        drifted.join("\n")
+    );
+    if head {
+        let n = report["counted_regions"].as_u64().unwrap() as usize;
+        assert_eq!(checked, n, "the report counted {n} regions");
+        let share = report["summary"]["default"]["all"]["within"]["25"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            within as f64 / checked as f64 >= share - 1e-9,
+            "{within} of {checked} within +-25 %, the report says {share}"
+        );
+    }
+}
