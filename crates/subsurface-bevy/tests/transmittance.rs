@@ -23,6 +23,11 @@ const VIEW_DEG: f32 = 30.0;
 /// `None`: no `Subsurface` on the camera (the skin keeps its marker, which tells the skin
 /// pixels); `Some(t)`: `Subsurface` with transmittance `t`.
 fn render(transmittance: Option<bool>) -> Vec<u8> {
+    render_with(transmittance, true)
+}
+
+/// As [`render`], the light casting shadows or not.
+fn render_with(transmittance: Option<bool>, shadows: bool) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = match transmittance {
@@ -91,7 +96,7 @@ fn render(transmittance: Option<bool>) -> Vec<u8> {
     world.spawn((
         DirectionalLight {
             illuminance: ILLUMINANCE,
-            shadow_maps_enabled: true,
+            shadow_maps_enabled: shadows,
             ..default()
         },
         // From straight behind the slab: along +z, toward the camera's side.
@@ -267,4 +272,25 @@ fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
             want[c]
         );
     }
+}
+
+/// Without a shadow-casting directional light there is no thickness to read: the step skips
+/// transmittance quietly, and the frame is the one without it, bit for bit.
+#[test]
+fn no_shadow_casting_light_no_transmittance() {
+    if !gpu_available() {
+        return;
+    }
+    let off = render_with(Some(false), false);
+    let on = render_with(Some(true), false);
+    let marked = render_with(None, false);
+    let skin = (0..HEIGHT)
+        .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
+        .filter(|&(x, y)| pixel(&marked, x, y)[3] < 0.0)
+        .count();
+    assert!(skin > 1000, "skin covers {skin} pixels");
+    assert!(
+        on == off,
+        "transmittance changed the frame without a shadow map"
+    );
 }
