@@ -126,10 +126,12 @@ impl Plugin for SubsurfacePlugin {
         embedded_asset!(app, "skin.wesl");
         app.init_resource::<SkinMedia>()
             .init_resource::<material::SpecularTwins>()
+            .init_resource::<transmit::SkinBounds>()
             .add_plugins((
                 MaterialPlugin::<SkinMaterial>::default(),
                 ExtractComponentPlugin::<Subsurface>::default(),
                 ExtractResourcePlugin::<SkinMedia>::default(),
+                ExtractResourcePlugin::<transmit::SkinBounds>::default(),
             ))
             .add_systems(
                 PostUpdate,
@@ -141,6 +143,12 @@ impl Plugin for SubsurfacePlugin {
                     prepare_cameras,
                 )
                     .chain(),
+            )
+            .add_systems(
+                PostUpdate,
+                transmit::skin_bounds
+                    .after(bevy::camera::visibility::VisibilitySystems::CalculateBounds)
+                    .after(bevy::transform::TransformSystems::Propagate),
             );
         render::build(app);
     }

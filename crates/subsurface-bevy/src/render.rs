@@ -271,6 +271,7 @@ fn subsurface_pass(
     light_views: Query<&LightEntity>,
     directional: Query<&ExtractedDirectionalLight>,
     media: Option<Res<SkinMedia>>,
+    bounds: Option<Res<transmit::SkinBounds>>,
     mut state: ResMut<SubsurfaceViews>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -398,10 +399,17 @@ fn subsurface_pass(
     let focal_px = 0.5 * size.1 as f32 * clip_from_view.y_axis.y;
     v.pass.prepare(queue, focal_px);
     // The camera's shadow-casting directional lights, in the layers of Bevy's texture.
-    let lights = match (&v.transmit, light_entities) {
-        (Some(_), Some(views)) => {
+    let skin_box = bounds.and_then(|b| b.0);
+    let lights = match (&v.transmit, light_entities, shadow_bindings, skin_box) {
+        (Some(_), Some(views), Some(bindings), Some(skin_box)) => {
+            let widest = media.rows.iter().map(|r| r.width).fold(0.0, f32::max);
+            let reach = Reach {
+                skin_box,
+                margin: transmit::MARGIN_MM * sub.units_per_mm * widest,
+                size: bindings.directional_light_depth_texture.width(),
+            };
             let exposure = camera.map_or(1.0, |c| c.exposure);
-            directional_shadows(entity, views, &light_views, &directional, exposure)
+            directional_shadows(entity, views, &light_views, &directional, exposure, &reach)
         }
         _ => Vec::new(),
     };
@@ -463,6 +471,14 @@ fn subsurface_pass(
     }
 }
 
+/// Where the skin lies for the shadow maps: its world box, the margin around it (world
+/// units), the maps' size.
+struct Reach {
+    skin_box: (bevy::math::Vec3, bevy::math::Vec3),
+    margin: f32,
+    size: u32,
+}
+
 /// The camera's shadow-casting directional lights as transmittance reads them: for each, the
 /// layer of Bevy's directional shadow texture that holds its cascade [`transmit::CASCADE`]
 /// (the camera's `ViewLightEntities` lists the cascades in layer order), and that cascade's
@@ -473,6 +489,7 @@ fn directional_shadows(
     light_views: &Query<&LightEntity>,
     directional: &Query<&ExtractedDirectionalLight>,
     exposure: f32,
+    reach: &Reach,
 ) -> Vec<DirectionalShadow> {
     let mut lights = Vec::new();
     for (layer, e) in views.lights.iter().enumerate() {
@@ -514,6 +531,12 @@ fn directional_shadows(
             direction: to_glam(direction),
             color: [c.red * scale, c.green * scale, c.blue * scale],
             texel_size: cascade.texel_size,
+            region: transmit::region(
+                cascade.clip_from_world,
+                reach.size,
+                reach.skin_box,
+                reach.margin,
+            ),
         });
     }
     lights

@@ -17,7 +17,13 @@
 //! lobe is albedo / pi x illuminance x exposure. So each light's colour is Bevy's colour x
 //! illuminance x the camera's exposure / pi, and every output lands in Bevy's units.
 
-use bevy::math::Mat4 as BevyMat4;
+use bevy::camera::primitives::Aabb;
+use bevy::ecs::prelude::*;
+use bevy::math::{Mat4 as BevyMat4, Vec3 as BevyVec3};
+use bevy::pbr::MeshMaterial3d;
+use bevy::render::RenderApp;
+use bevy::render::extract_resource::ExtractResource;
+use bevy::transform::components::GlobalTransform;
 use glam::{Mat4, Vec3};
 use subsurface_render::material::MaterialCache;
 use subsurface_render::passes::lighting::{self, ShadowMaps};
@@ -29,7 +35,81 @@ use subsurface_render::uniforms::{CameraUniform, LightUniform, LightsUniform, MA
 use subsurface_render::{RenderSettings, gpu_scene};
 
 use crate::SubsurfaceError;
-use crate::material::SkinMedia;
+use crate::material::{SkinMaterial, SkinMedia, SkinSpecular};
+
+/// The world-space box around every skin mesh (main world, extracted each frame it
+/// changes): the copy and entry passes draw only the texels of Bevy's cascade that it covers,
+/// grown by [`MARGIN_MM`], rather than the whole map (a 2048² cascade costs hundreds of
+/// milliseconds a frame on a software rasterizer, most of it far from any skin).
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
+pub struct SkinBounds(pub Option<(BevyVec3, BevyVec3)>);
+
+impl ExtractResource<RenderApp> for SkinBounds {
+    type Source = SkinBounds;
+
+    fn extract_resource(source: &Self::Source) -> Self {
+        *source
+    }
+}
+
+/// Profile millimetres around the skin's box that the passes still draw: the transmitted
+/// light's lateral taps reach this far beside the light's chord (their spread follows the
+/// medium's slowest decay, and past DIFFUSION_RANGE_MM the tables hold nothing).
+pub const MARGIN_MM: f32 = 50.0;
+
+/// The skin meshes (their specular twins are the same meshes again).
+type SkinMeshes = (With<MeshMaterial3d<SkinMaterial>>, Without<SkinSpecular>);
+
+pub(crate) fn skin_bounds(
+    skins: Query<(&GlobalTransform, &Aabb), SkinMeshes>,
+    mut bounds: ResMut<SkinBounds>,
+) {
+    let mut b: Option<(BevyVec3, BevyVec3)> = None;
+    for (transform, aabb) in &skins {
+        let (centre, half) = (
+            BevyVec3::from(aabb.center),
+            BevyVec3::from(aabb.half_extents),
+        );
+        for i in 0..8 {
+            let sign = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+            let corner = centre + half * BevyVec3::new(sign(1), sign(2), sign(4));
+            let p = transform.transform_point(corner);
+            b = Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+        }
+    }
+    bounds.set_if_neq(SkinBounds(b));
+}
+
+/// The texels `[x, y, width, height]` of a `size`² cascade map (`clip_from_world`) that the
+/// box `bounds` covers, grown by `margin` world units; empty when it lies outside.
+pub(crate) fn region(
+    clip_from_world: BevyMat4,
+    size: u32,
+    (lo, hi): (BevyVec3, BevyVec3),
+    margin: f32,
+) -> [u32; 4] {
+    let (lo, hi) = (lo - BevyVec3::splat(margin), hi + BevyVec3::splat(margin));
+    let (mut min, mut max) = (bevy::math::Vec2::splat(f32::MAX), bevy::math::Vec2::MIN);
+    for i in 0..8 {
+        let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
+        let corner = BevyVec3::new(
+            pick(1, lo.x, hi.x),
+            pick(2, lo.y, hi.y),
+            pick(4, lo.z, hi.z),
+        );
+        let ndc = clip_from_world.project_point3(corner);
+        let uv = bevy::math::Vec2::new(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+        min = min.min(uv);
+        max = max.max(uv);
+    }
+    // Whole texels, and one more each side for the entry pass's neighbours.
+    let s = size as f32;
+    let x0 = (min.x * s - 1.0).floor().clamp(0.0, s) as u32;
+    let y0 = (min.y * s - 1.0).floor().clamp(0.0, s) as u32;
+    let x1 = (max.x * s + 1.0).ceil().clamp(0.0, s) as u32;
+    let y1 = (max.y * s + 1.0).ceil().clamp(0.0, s) as u32;
+    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
+}
 
 const FORWARD_Z_WGSL: &str = include_str!("forward_z.wgsl");
 const ADD_WGSL: &str = include_str!("add.wgsl");
@@ -71,6 +151,8 @@ pub(crate) struct DirectionalShadow {
     pub color: [f32; 3],
     /// The cascade's texel size, world units.
     pub texel_size: f32,
+    /// The texels the skin covers (see [`region`]).
+    pub region: [u32; 4],
 }
 
 fn mat(m: BevyMat4) -> Mat4 {
@@ -306,6 +388,9 @@ impl Transmit {
             return;
         };
         shadows.entry.set_layers(queue, &entry_layers);
+        for (i, light) in lights.iter().enumerate() {
+            shadows.entry.set_region(i, Some(light.region));
+        }
         for (copy, light) in shadows.copies.iter().zip(lights) {
             let layer = [light.bevy_layer as i32, 0, 0, 0];
             queue.write_buffer(&copy.uniform, 0, bytemuck::cast_slice(&layer));
@@ -330,7 +415,7 @@ impl Transmit {
             self.gbuffer = Some((frame.clip_from_world, bind_group));
         }
 
-        for copy in &shadows.copies {
+        for (copy, light) in shadows.copies.iter().zip(lights) {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("subsurface forward z"),
                 color_attachments: &[],
@@ -343,9 +428,14 @@ impl Transmit {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&pipelines.forward_z);
-            pass.set_bind_group(0, &copy.bind_group, &[]);
-            pass.draw(0..3, 0..1);
+            // Outside the region the layer stays cleared: empty.
+            let [x, y, w, h] = light.region;
+            if w > 0 && h > 0 {
+                pass.set_scissor_rect(x, y, w, h);
+                pass.set_pipeline(&pipelines.forward_z);
+                pass.set_bind_group(0, &copy.bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            }
         }
         shadows.entry.encode(encoder, None);
         // The scratch target starts each frame empty; the pass adds into it.
@@ -524,5 +614,24 @@ mod tests {
             assert!((ours.z / ours.w - (1.0 - bevy_d)).abs() < 1e-6, "{ours}");
             assert!((ours.x - 0.15).abs() < 1e-6 && (ours.y + 0.1).abs() < 1e-6);
         }
+    }
+
+    /// The texels a box covers: a cascade 4 units wide on 16 texels sees a 1-unit box at its
+    /// centre on texels 6..10, 5..11 with the neighbour each side; grown by a margin of 1
+    /// (3 units: texels 2..14), 1..15; a box beside the cascade covers none.
+    #[test]
+    fn region_covers_the_box_and_its_margin() {
+        let clip_from_world = BevyMat4::from_cols(
+            bevy::math::Vec4::new(0.5, 0.0, 0.0, 0.0),
+            bevy::math::Vec4::new(0.0, 0.5, 0.0, 0.0),
+            bevy::math::Vec4::new(0.0, 0.0, 0.25, 0.0),
+            bevy::math::Vec4::new(0.0, 0.0, 1.0, 1.0),
+        );
+        let unit = (BevyVec3::splat(-0.5), BevyVec3::new(0.5, 0.5, -1.0));
+        assert_eq!(region(clip_from_world, 16, unit, 0.0), [5, 5, 6, 6]);
+        assert_eq!(region(clip_from_world, 16, unit, 1.0), [1, 1, 14, 14]);
+        let beside = (BevyVec3::new(5.0, 0.0, -1.0), BevyVec3::new(6.0, 1.0, -0.5));
+        let [_, _, w, _] = region(clip_from_world, 16, beside, 0.0);
+        assert_eq!(w, 0);
     }
 }
