@@ -57,15 +57,24 @@ impl ExtractResource<RenderApp> for SkinBounds {
 /// medium's slowest decay, and past DIFFUSION_RANGE_MM the tables hold nothing).
 pub const MARGIN_MM: f32 = 50.0;
 
+/// The half-size of the box taken for skin without an `Aabb`: far beyond any cascade, small
+/// enough that its corners project to finite clip coordinates.
+const UNBOUNDED: f32 = 1e9;
+
 /// The skin meshes (their specular twins are the same meshes again).
 type SkinMeshes = (With<MeshMaterial3d<SkinMaterial>>, Without<SkinSpecular>);
 
 pub(crate) fn skin_bounds(
-    skins: Query<(&GlobalTransform, &Aabb), SkinMeshes>,
+    skins: Query<(&GlobalTransform, Option<&Aabb>), SkinMeshes>,
     mut bounds: ResMut<SkinBounds>,
 ) {
     let mut b: Option<(BevyVec3, BevyVec3)> = None;
     for (transform, aabb) in &skins {
+        // A mesh without bounds (`NoFrustumCulling`) could be anywhere: the whole map.
+        let Some(aabb) = aabb else {
+            b = Some((BevyVec3::splat(-UNBOUNDED), BevyVec3::splat(UNBOUNDED)));
+            break;
+        };
         let (centre, half) = (
             BevyVec3::from(aabb.center),
             BevyVec3::from(aabb.half_extents),
