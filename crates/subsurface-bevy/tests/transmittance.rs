@@ -23,11 +23,12 @@ const VIEW_DEG: f32 = 30.0;
 /// `None`: no `Subsurface` on the camera (the skin keeps its marker, which tells the skin
 /// pixels); `Some(t)`: `Subsurface` with transmittance `t`.
 fn render(transmittance: Option<bool>) -> Vec<u8> {
-    render_with(transmittance, true)
+    render_with(transmittance, true, None)
 }
 
-/// As [`render`], the light casting shadows or not.
-fn render_with(transmittance: Option<bool>, shadows: bool) -> Vec<u8> {
+/// As [`render`], the light casting shadows or not; with `first_eye`, the camera first
+/// renders a stable frame from there, then moves to its place.
+fn render_with(transmittance: Option<bool>, shadows: bool, first_eye: Option<Vec3>) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = match transmittance {
@@ -45,9 +46,9 @@ fn render_with(transmittance: Option<bool>, shadows: bool) -> Vec<u8> {
     let a = VIEW_DEG.to_radians();
     let eye = Vec3::new(0.5 * a.sin(), 0.0, 0.5 * a.cos());
     let world = h.app.world_mut();
-    world
-        .entity_mut(h.camera)
-        .insert(Transform::from_translation(eye).looking_at(Vec3::ZERO, Vec3::Y));
+    world.entity_mut(h.camera).insert(
+        Transform::from_translation(first_eye.unwrap_or(eye)).looking_at(Vec3::ZERO, Vec3::Y),
+    );
     world.insert_resource(GlobalAmbientLight {
         brightness: 0.0,
         ..default()
@@ -112,6 +113,19 @@ fn render_with(transmittance: Option<bool>, shadows: bool) -> Vec<u8> {
         }
         .build(),
     ));
+    if first_eye.is_some() {
+        render_until_stable(&mut h, 600);
+        h.app
+            .world_mut()
+            .entity_mut(h.camera)
+            .insert(Transform::from_translation(eye).looking_at(Vec3::ZERO, Vec3::Y));
+        // Read-backs of frames drawn before the move are still in flight: two of them in a
+        // row would look stable.
+        for _ in 0..8 {
+            h.app.update();
+        }
+        h.readback.lock().unwrap().take();
+    }
     let image = render_until_stable(&mut h, 600);
     // The test splits the image between the two at its middle column.
     let (slab_px, ball_px) = (
@@ -281,9 +295,9 @@ fn no_shadow_casting_light_no_transmittance() {
     if !gpu_available() {
         return;
     }
-    let off = render_with(Some(false), false);
-    let on = render_with(Some(true), false);
-    let marked = render_with(None, false);
+    let off = render_with(Some(false), false, None);
+    let on = render_with(Some(true), false, None);
+    let marked = render_with(None, false, None);
     let skin = (0..HEIGHT)
         .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
         .filter(|&(x, y)| pixel(&marked, x, y)[3] < 0.0)
@@ -293,4 +307,24 @@ fn no_shadow_casting_light_no_transmittance() {
         on == off,
         "transmittance changed the frame without a shadow map"
     );
+}
+
+/// The cascades follow the camera, and the step's G-buffer binding holds the camera's
+/// matrix: a camera that rendered elsewhere first and then moved gives, bit for bit, the
+/// frame of one that started where it ends (with the light gained through the slab).
+#[test]
+fn a_moved_camera_transmits_as_a_fresh_one() {
+    if !gpu_available() {
+        return;
+    }
+    let fresh = render(Some(true));
+    let moved = render_with(Some(true), true, Some(Vec3::new(-0.2, 0.15, 0.6)));
+    let off = render(Some(false));
+    assert!(fresh != off, "no transmitted light in the frame");
+    let differ = fresh
+        .chunks(8)
+        .zip(moved.chunks(8))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels differ after the move");
 }
