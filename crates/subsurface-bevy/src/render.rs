@@ -457,7 +457,6 @@ fn subsurface_pass(
                 bevy_shadows: &bindings.directional_light_depth_texture,
                 depth: &v.targets[0],
                 sss: &v.targets[1],
-                quality: sub.quality,
                 units_per_mm: sub.units_per_mm,
             };
             t.encode(device_ref, queue, transmit_pipelines, encoder, &frame);

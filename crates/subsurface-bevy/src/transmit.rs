@@ -268,6 +268,9 @@ type ShadowKey = (bevy::render::render_resource::TextureId, u32, usize);
 
 /// One camera's transmittance state (for one main texture, as `render::ViewSss`).
 pub(crate) struct Transmit {
+    /// The quality preset's, as [`settings`] adapts them (the view is rebuilt when the
+    /// quality changes).
+    settings: RenderSettings,
     pass: TransmittedLightPass,
     media: Vec<SkinMedium>,
     camera: wgpu::Buffer,
@@ -293,7 +296,6 @@ pub(crate) struct Frame<'a> {
     pub bevy_shadows: &'a bevy::render::render_resource::Texture,
     pub depth: &'a wgpu::TextureView,
     pub sss: &'a wgpu::TextureView,
-    pub quality: crate::Quality,
     pub units_per_mm: f32,
 }
 
@@ -353,6 +355,7 @@ impl Transmit {
             })
         };
         Ok(Self {
+            settings,
             pass,
             media: skin_media,
             camera: uniform("subsurface camera", std::mem::size_of::<CameraUniform>()),
@@ -405,7 +408,7 @@ impl Transmit {
             queue.write_buffer(&copy.uniform, 0, bytemuck::cast_slice(&layer));
         }
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&frame.camera));
-        let uniform = lights_uniform(lights, &settings(frame.quality), frame.units_per_mm, size);
+        let uniform = lights_uniform(lights, &self.settings, frame.units_per_mm, size);
         queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(&uniform));
         if self
             .gbuffer
