@@ -88,9 +88,10 @@ struct GBufferOut {
 };
 
 // fs_mark and, for the transmitted light pass, a G-buffer: the normal is rebuilt from the depth
-// buffer (Bevy's forward pass writes none without a normal prepass, which would change the
-// frame's other pixels), so it is the geometry's, flat per triangle, as the pass wants it
-// (thickness follows the geometry, not a normal map); the albedo is the row's.
+// buffer (Bevy's forward pass writes none without a normal prepass, a camera-wide change the
+// plugin does not impose), so it is the geometry's, flat per triangle where the pass would
+// take the interpolated vertex normal (both ignore normal maps: thickness follows the
+// geometry); the albedo is the row's.
 @fragment
 fn fs_mark_gbuffer(in: FullscreenOut) -> GBufferOut {
     let m = mark(in);
