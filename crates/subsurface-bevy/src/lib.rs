@@ -34,10 +34,13 @@
 //! 2. Between Bevy's opaque and transparent passes, [`render`]'s step turns the camera's
 //!    depth buffer and that marker into subsurface-render's inputs (linear depth; strength,
 //!    scale, profile row) and runs `SssPass` on the HDR texture itself.
+//!    With [`Subsurface::transmittance`] (the default), the step first adds the light that
+//!    crosses thin backlit skin, read from Bevy's directional shadow maps ([`transmit`]).
 //! 3. Bevy's transparent pass then adds the skin's specular light, drawn by a child entity
 //!    ([`SkinSpecular`]) with an additive twin of the material: highlights stay sharp.
 //!
-//! Limits of this version: no transmittance yet; cameras need `Msaa::Off` (the plugin sets
+//! Limits of this version: transmittance from directional lights only (one cascade each),
+//! with each material row's base colour as albedo; cameras need `Msaa::Off` (the plugin sets
 //! it) and a perspective projection; each skin mesh is drawn twice in the main passes.
 
 use bevy::app::{App, Plugin, PostUpdate};
@@ -54,6 +57,7 @@ use bevy::render::view::Msaa;
 
 mod material;
 pub mod render;
+pub mod transmit;
 
 pub use material::{Skin, SkinMaterial, SkinMedia, SkinRow, SkinSpecular};
 pub use subsurface_render::settings::Quality;
@@ -84,6 +88,10 @@ pub struct Subsurface {
     /// Scene units per millimetre of skin. Bevy's unit is the metre, so 0.001; a skin
     /// material's width multiplies it.
     pub units_per_mm: f32,
+    /// Light through thin backlit skin (ears, fingers) from the camera's shadow-casting
+    /// directional lights, read from Bevy's shadow maps (the first cascade of each: see
+    /// [`transmit::CASCADE`]). On by default; a camera without such a light skips it.
+    pub transmittance: bool,
 }
 
 impl Default for Subsurface {
@@ -91,6 +99,7 @@ impl Default for Subsurface {
         Self {
             quality: Quality::Medium,
             units_per_mm: 0.001,
+            transmittance: true,
         }
     }
 }
@@ -117,10 +126,12 @@ impl Plugin for SubsurfacePlugin {
         embedded_asset!(app, "skin.wesl");
         app.init_resource::<SkinMedia>()
             .init_resource::<material::SpecularTwins>()
+            .init_resource::<transmit::SkinBounds>()
             .add_plugins((
                 MaterialPlugin::<SkinMaterial>::default(),
                 ExtractComponentPlugin::<Subsurface>::default(),
                 ExtractResourcePlugin::<SkinMedia>::default(),
+                ExtractResourcePlugin::<transmit::SkinBounds>::default(),
             ))
             .add_systems(
                 PostUpdate,
@@ -132,6 +143,12 @@ impl Plugin for SubsurfacePlugin {
                     prepare_cameras,
                 )
                     .chain(),
+            )
+            .add_systems(
+                PostUpdate,
+                transmit::skin_bounds
+                    .after(bevy::camera::visibility::VisibilitySystems::CalculateBounds)
+                    .after(bevy::transform::TransformSystems::Propagate),
             );
         render::build(app);
     }

@@ -100,6 +100,10 @@ impl MaterialExtension for Skin {
 pub struct SkinRow {
     pub medium: String,
     pub width: f32,
+    /// Linear diffuse albedo (`base_color` x (1 - metallic)) of the first material that took
+    /// the row: the transmitted light's, as Bevy's forward pass keeps no albedo per pixel.
+    /// Materials sharing a (medium, width) share it; textures are not read.
+    pub albedo: [f32; 3],
 }
 
 /// The profile table: every (medium, width) pair the skin materials have used, in order of
@@ -118,13 +122,18 @@ impl SkinMedia {
         subsurface_profile::Medium::Preset(medium.to_string())
             .material()
             .map_err(|e| SubsurfaceError::Medium(medium.to_string(), e.to_string()))?;
+        if let Some(i) = self
+            .rows
+            .iter()
+            .position(|r| r.medium == medium && r.width == width)
+        {
+            return Ok(i as u32);
+        }
         let key = SkinRow {
             medium: medium.to_string(),
             width,
+            albedo: [1.0; 3],
         };
-        if let Some(i) = self.rows.iter().position(|r| *r == key) {
-            return Ok(i as u32);
-        }
         if self.rows.len() == MAX_ROWS {
             return Err(SubsurfaceError::TooManyRows { max: MAX_ROWS });
         }
@@ -161,12 +170,17 @@ pub(crate) fn assign_rows(
         }
         // Change detection on the table is set below only when a row was added: looking a
         // row up every frame must not re-extract the table every frame.
-        let row = match media
-            .bypass_change_detection()
-            .row(&skin.medium, skin.width)
-        {
+        let table = media.bypass_change_detection();
+        let rows = table.rows.len();
+        let row = match table.row(&skin.medium, skin.width) {
             Ok(row) => {
                 reported.remove(&id);
+                if table.rows.len() > rows {
+                    let c = m.base.base_color.to_linear();
+                    let diffuse = 1.0 - m.base.metallic.clamp(0.0, 1.0);
+                    table.rows[row as usize].albedo =
+                        [c.red, c.green, c.blue].map(|x| x.max(0.0) * diffuse);
+                }
                 Some(row)
             }
             Err(e) => {

@@ -12,8 +12,10 @@ use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
+use bevy::pbr::{ExtractedDirectionalLight, LightEntity, ViewLightEntities, ViewShadowBindings};
 use bevy::platform::collections::HashMap;
 use bevy::render::RenderApp;
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewDepthStencilTexture, ViewTarget};
 use subsurface_profile::KernelParams;
@@ -24,6 +26,7 @@ use subsurface_render::scene::MaterialDesc;
 use subsurface_render::{RenderSettings, SssFetch, SssSettings};
 
 use crate::material::{MAX_ROWS, SkinMedia};
+use crate::transmit::{self, DirectionalShadow, Transmit};
 use crate::{Subsurface, SubsurfaceError};
 
 const MARK_WGSL: &str = include_str!("mark.wgsl");
@@ -46,10 +49,12 @@ pub(crate) fn build(app: &mut App) {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct MarkUniform {
     view_from_clip: [[f32; 4]; 4],
+    world_from_view: [[f32; 4]; 4],
     size: [f32; 2],
     rows: u32,
     _pad: u32,
     scale: [[f32; 4]; MAX_ROWS / 4],
+    albedo: [[f32; 4]; MAX_ROWS],
 }
 
 /// The SSS settings of a quality preset, with the fetch that works on Bevy's main texture:
@@ -104,6 +109,8 @@ struct ViewSss {
     /// The mark pass's targets, linear depth and the SSS texture (the views keep their
     /// textures alive).
     targets: [wgpu::TextureView; 2],
+    /// Transmittance, where the camera has it on (the mark pass then writes its G-buffer).
+    transmit: Option<Transmit>,
     last_frame: u64,
 }
 
@@ -112,7 +119,9 @@ struct ViewSss {
 /// may hold one state per main texture.
 #[derive(Resource, Default)]
 pub struct SubsurfaceViews {
-    mark: Option<wgpu::RenderPipeline>,
+    /// The mark pipelines: without and with the transmittance's G-buffer.
+    mark: Option<[wgpu::RenderPipeline; 2]>,
+    transmit: Option<transmit::Pipelines>,
     views: HashMap<(Entity, bevy::render::render_resource::TextureId), ViewSss>,
     cache: Option<MaterialCache>,
     /// Cameras already told why they are skipped (once each).
@@ -120,25 +129,26 @@ pub struct SubsurfaceViews {
     failed: bool,
 }
 
-fn mark_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+fn mark_pipelines(device: &wgpu::Device) -> [wgpu::RenderPipeline; 2] {
     let source = format!("{}{MARK_WGSL}", fullscreen::VERTEX_WGSL);
     let module = util::wgsl_module(device, "subsurface mark", &source);
-    fullscreen::pipeline(
-        device,
-        &module,
-        None, // layout derived from the shader: uniform, colour, depth
-        "fs_mark",
-        &[
-            Some(wgpu::TextureFormat::R32Float.into()),
-            Some(sss::FORMAT.into()),
-        ],
-    )
+    let targets = [
+        Some(wgpu::TextureFormat::R32Float.into()),
+        Some(sss::FORMAT.into()),
+        Some(wgpu::TextureFormat::Rgba16Float.into()),
+        Some(wgpu::TextureFormat::Rgba16Float.into()),
+    ];
+    // Layouts derived from the shader: uniform, colour, depth.
+    [("fs_mark", 2), ("fs_mark_gbuffer", 4)]
+        .map(|(entry, n)| fullscreen::pipeline(device, &module, None, entry, &targets[..n]))
 }
 
 #[allow(clippy::too_many_arguments)]
 fn build_view(
     device: &wgpu::Device,
-    mark: &wgpu::RenderPipeline,
+    queue: &wgpu::Queue,
+    mark: &[wgpu::RenderPipeline; 2],
+    transmit_pipelines: &transmit::Pipelines,
     cache: &mut MaterialCache,
     key: ViewSssKey,
     main: &wgpu::Texture,
@@ -160,6 +170,21 @@ fn build_view(
     };
     let depth = target("subsurface linear depth", wgpu::TextureFormat::R32Float);
     let sss_tex = target("subsurface skin", sss::FORMAT);
+    let transmit = if sub.transmittance {
+        Some(Transmit::new(
+            device,
+            queue,
+            transmit_pipelines,
+            cache,
+            main,
+            sub.quality,
+            sub.units_per_mm,
+            media,
+        )?)
+    } else {
+        None
+    };
+    let mark = &mark[usize::from(transmit.is_some())];
     let settings = sss_settings(sub.quality);
     let mut pass = SssPass::new(device, &settings, &kernels(media, &settings, cache)?)?;
     let view = |t: &wgpu::Texture| t.create_view(&Default::default());
@@ -208,31 +233,45 @@ fn build_view(
         mark_uniform,
         mark_bind_group,
         targets: [depth_view, sss_view],
+        transmit,
         last_frame: 0,
     })
 }
 
 /// What a camera's targets and passes were built for: main texture, depth texture, size,
-/// quality, rows of the profile table.
+/// quality, rows of the profile table, transmittance on, units per mm (its bits: the
+/// transmittance's media are scaled by it).
 type ViewSssKey = (
     bevy::render::render_resource::TextureId,
     bevy::render::render_resource::TextureId,
     (u32, u32),
     crate::Quality,
     usize,
+    bool,
+    u32,
+);
+
+/// What the step reads of its camera: the view, its targets, the settings, the exposure (for
+/// the lights' units) and its directional shadow maps with their cascades' views.
+type StepView = (
+    &'static ExtractedView,
+    &'static ViewTarget,
+    &'static ViewDepthStencilTexture,
+    &'static Subsurface,
+    Option<&'static ExtractedCamera>,
+    Option<&'static ViewShadowBindings>,
+    Option<&'static ViewLightEntities>,
 );
 
 /// The step itself (a system of the camera's `Core3d` schedule; Bevy runs it once per
 /// camera with that camera as the `ViewQuery`'s entity).
 #[allow(clippy::too_many_arguments)]
 fn subsurface_pass(
-    view: ViewQuery<(
-        &ExtractedView,
-        &ViewTarget,
-        &ViewDepthStencilTexture,
-        &Subsurface,
-    )>,
+    view: ViewQuery<StepView>,
+    light_views: Query<&LightEntity>,
+    directional: Query<&ExtractedDirectionalLight>,
     media: Option<Res<SkinMedia>>,
+    bounds: Option<Res<transmit::SkinBounds>>,
     mut state: ResMut<SubsurfaceViews>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -240,7 +279,8 @@ fn subsurface_pass(
     mut ctx: RenderContext,
 ) {
     let entity = view.entity();
-    let (extracted, target, depth_buffer, sub) = view.into_inner();
+    let (extracted, target, depth_buffer, sub, camera, shadow_bindings, light_entities) =
+        view.into_inner();
     // No skin material has a row yet: no pixel is marked, nothing to do.
     let Some(media) = media.filter(|m| !m.rows.is_empty()) else {
         return;
@@ -281,7 +321,11 @@ fn subsurface_pass(
     let device_ref: &wgpu::Device = device.wgpu_device();
     let state = &mut *state;
     let frame = u64::from(frame_count.0);
-    let mark = state.mark.get_or_insert_with(|| mark_pipeline(device_ref));
+    let queue: &wgpu::Queue = &queue;
+    let mark = state.mark.get_or_insert_with(|| mark_pipelines(device_ref));
+    let transmit_pipelines = state
+        .transmit
+        .get_or_insert_with(|| transmit::Pipelines::new(device_ref));
     let cache = state.cache.get_or_insert_with(MaterialCache::default);
 
     let key: ViewSssKey = (
@@ -290,10 +334,23 @@ fn subsurface_pass(
         size,
         sub.quality,
         media.rows.len(),
+        sub.transmittance,
+        sub.units_per_mm.to_bits(),
     );
     let slot = (entity, key.0);
     if state.views.get(&slot).is_none_or(|v| v.key != key) {
-        match build_view(device_ref, mark, cache, key, main, depth_tex, sub, &media) {
+        match build_view(
+            device_ref,
+            queue,
+            mark,
+            transmit_pipelines,
+            cache,
+            key,
+            main,
+            depth_tex,
+            sub,
+            &media,
+        ) {
             Ok(v) => {
                 log::debug!(
                     "subsurface: camera {entity} bound to main texture {:?}, {}x{}, {} rows",
@@ -322,37 +379,164 @@ fn subsurface_pass(
     v.last_frame = frame;
 
     let mut scale = [[0.0f32; 4]; MAX_ROWS / 4];
+    let mut albedo = [[0.0f32; 4]; MAX_ROWS];
     for (i, row) in media.rows.iter().enumerate() {
         scale[i / 4][i % 4] = sub.units_per_mm * row.width;
+        albedo[i] = [row.albedo[0], row.albedo[1], row.albedo[2], 1.0];
     }
+    let world_from_view = extracted.world_from_view.to_matrix();
     let uniform = MarkUniform {
         view_from_clip: clip_from_view.inverse().to_cols_array_2d(),
+        world_from_view: world_from_view.to_cols_array_2d(),
         size: [size.0 as f32, size.1 as f32],
         rows: media.rows.len() as u32,
         _pad: 0,
         scale,
+        albedo,
     };
-    let queue: &wgpu::Queue = &queue;
     queue.write_buffer(&v.mark_uniform, 0, bytemuck::bytes_of(&uniform));
     // Focal length in pixels: clip_from_view's y scale is 1 / tan(fov_y / 2).
-    v.pass
-        .prepare(queue, 0.5 * size.1 as f32 * clip_from_view.y_axis.y);
+    let focal_px = 0.5 * size.1 as f32 * clip_from_view.y_axis.y;
+    v.pass.prepare(queue, focal_px);
+    // The camera's shadow-casting directional lights, in the layers of Bevy's texture.
+    let skin_box = bounds.and_then(|b| b.0);
+    let lights = match (&v.transmit, light_entities, shadow_bindings, skin_box) {
+        (Some(_), Some(views), Some(bindings), Some(skin_box)) => {
+            let widest = media.rows.iter().map(|r| r.width).fold(0.0, f32::max);
+            let reach = Reach {
+                skin_box,
+                margin: transmit::MARGIN_MM * sub.units_per_mm * widest,
+                size: bindings.directional_light_depth_texture.width(),
+            };
+            let exposure = camera.map_or(1.0, |c| c.exposure);
+            directional_shadows(entity, views, &light_views, &directional, exposure, &reach)
+        }
+        _ => Vec::new(),
+    };
+    let clip_from_world = clip_from_view * world_from_view.inverse();
 
     let encoder = ctx.command_encoder();
     {
         let attach =
             |view| util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
+        let mut targets = vec![attach(&v.targets[0]), attach(&v.targets[1])];
+        if let Some(t) = &v.transmit {
+            targets.extend([attach(&t.normal), attach(&t.albedo)]);
+        }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("subsurface mark"),
-            color_attachments: &[attach(&v.targets[0]), attach(&v.targets[1])],
+            color_attachments: &targets,
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(mark);
+        pass.set_pipeline(&mark[usize::from(v.transmit.is_some())]);
         pass.set_bind_group(0, &v.mark_bind_group, &[]);
         pass.draw(0..3, 0..1);
     }
+    // Transmitted light joins the diffuse light before the blur; its unscattered part is
+    // added after it. Without a shadow-casting directional light there is nothing to add.
+    let transmitting = match (&mut v.transmit, shadow_bindings) {
+        (Some(t), Some(bindings)) if !lights.is_empty() => {
+            let forward = world_from_view.transform_vector3(bevy::math::Vec3::NEG_Z);
+            let frame = transmit::Frame {
+                camera: subsurface_render::uniforms::CameraUniform {
+                    view_proj: clip_from_world.to_cols_array_2d(),
+                    position: world_from_view.w_axis.truncate().to_array(),
+                    near: clip_from_view.w_axis.z,
+                    forward: forward.normalize().to_array(),
+                    // Bevy's perspective has no far plane.
+                    far: f32::MAX,
+                    focal_px,
+                    viewport: [size.0 as f32, size.1 as f32],
+                    _pad: 0.0,
+                },
+                clip_from_world,
+                lights: &lights,
+                bevy_shadows: &bindings.directional_light_depth_texture,
+                depth: &v.targets[0],
+                sss: &v.targets[1],
+                units_per_mm: sub.units_per_mm,
+            };
+            t.encode(device_ref, queue, transmit_pipelines, encoder, &frame);
+            true
+        }
+        _ => false,
+    };
     v.pass.encode(encoder, None);
+    if let (true, Some(t)) = (transmitting, &v.transmit) {
+        t.add_unscattered(transmit_pipelines, encoder);
+    }
+}
+
+/// Where the skin lies for the shadow maps: its world box, the margin around it (world
+/// units), the maps' size.
+struct Reach {
+    skin_box: (bevy::math::Vec3, bevy::math::Vec3),
+    margin: f32,
+    size: u32,
+}
+
+/// The camera's shadow-casting directional lights as transmittance reads them: for each, the
+/// layer of Bevy's directional shadow texture that holds its cascade [`transmit::CASCADE`]
+/// (the camera's `ViewLightEntities` lists the cascades in layer order), and that cascade's
+/// matrices from the extracted light.
+fn directional_shadows(
+    view: Entity,
+    views: &ViewLightEntities,
+    light_views: &Query<&LightEntity>,
+    directional: &Query<&ExtractedDirectionalLight>,
+    exposure: f32,
+    reach: &Reach,
+) -> Vec<DirectionalShadow> {
+    let mut lights = Vec::new();
+    for (layer, e) in views.lights.iter().enumerate() {
+        let Ok(LightEntity::Directional {
+            light_entity,
+            cascade_index,
+        }) = light_views.get(*e)
+        else {
+            continue;
+        };
+        if *cascade_index != transmit::CASCADE {
+            continue;
+        }
+        let Ok(light) = directional.get(*light_entity) else {
+            continue;
+        };
+        let Some(cascade) = light
+            .cascades
+            .get(&view)
+            .and_then(|c| c.get(transmit::CASCADE))
+        else {
+            continue;
+        };
+        if !light.shadow_maps_enabled {
+            continue;
+        }
+        let to_glam = |v: bevy::math::Vec3| glam::Vec3::from_array(v.to_array());
+        let direction = light
+            .transform
+            .to_matrix()
+            .transform_vector3(bevy::math::Vec3::NEG_Z)
+            .normalize();
+        let c = light.color;
+        let scale = light.illuminance * exposure / std::f32::consts::PI;
+        lights.push(DirectionalShadow {
+            bevy_layer: layer as u32,
+            clip_from_world: cascade.clip_from_world,
+            origin: to_glam(cascade.world_from_cascade.w_axis.truncate()),
+            direction: to_glam(direction),
+            color: [c.red * scale, c.green * scale, c.blue * scale],
+            texel_size: cascade.texel_size,
+            region: transmit::region(
+                cascade.clip_from_world,
+                reach.size,
+                reach.skin_box,
+                reach.margin,
+            ),
+        });
+    }
+    lights
 }

@@ -19,8 +19,8 @@ enum Case {
     Plain,
     /// The skin material (diffuse + specular twin), camera without `Subsurface`.
     SkinNoStep,
-    /// The skin material and a `Subsurface` camera.
-    Skin(Quality),
+    /// The skin material and a `Subsurface` camera, with transmittance or without.
+    Skin(Quality, bool),
 }
 
 fn frame_ms(case: Case) -> f64 {
@@ -29,10 +29,11 @@ fn frame_ms(case: Case) -> f64 {
         app.add_plugins(SubsurfacePlugin);
     }
     let mut h = match case {
-        Case::Skin(quality) => setup_sized(
+        Case::Skin(quality, transmittance) => setup_sized(
             app,
             Subsurface {
                 quality,
+                transmittance,
                 ..default()
             },
             Tonemapping::None,
@@ -81,9 +82,12 @@ fn frame_times() {
     for case in [
         Case::Plain,
         Case::SkinNoStep,
-        Case::Skin(Quality::Low),
-        Case::Skin(Quality::Medium),
-        Case::Skin(Quality::High),
+        Case::Skin(Quality::Low, false),
+        Case::Skin(Quality::Medium, false),
+        Case::Skin(Quality::High, false),
+        Case::Skin(Quality::Low, true),
+        Case::Skin(Quality::Medium, true),
+        Case::Skin(Quality::High, true),
     ] {
         let ms = frame_ms(case);
         eprintln!("{}x{} {case:?}: {ms:.1} ms/frame", SIZE.0, SIZE.1);

@@ -38,14 +38,39 @@ pub fn object_uniform(
         model: mat(object.transform),
         normal_matrix: mat(object.transform.inverse().transpose()),
         albedo: std::array::from_fn(|c| object.albedo[c] * optics.diffuse_albedo[c]),
-        roughness: m.roughness,
-        specular: m.specular,
-        sss_strength: m.sss_strength,
-        world_per_mm: world_per_mm(object),
-        translucency: m.translucency,
         has_albedo_map: object.albedo_texture.is_some() as u32,
         has_normal_map: object.normal_texture.is_some() as u32,
         has_specular_map: object.specular_texture.is_some() as u32,
+        ..medium_uniform(m, optics, world_per_mm(object), lut_range_mm, profile_row)
+    }
+}
+
+/// An [`ObjectUniform`] from plain values, for an engine that has no [`Scene`]: the
+/// material's boundary and scattering parameters (`roughness`, `specular`, `sss_strength`,
+/// `translucency`; its medium only through `optics`), the scene units per profile millimetre
+/// of its pixels, the T(s) LUT width and its profile row. The transform is the identity, the
+/// albedo `optics`' own and no texture maps are bound: the transmitted light pass
+/// ([`crate::passes::transmitted_light`]) reads none of them.
+pub fn medium_uniform(
+    material: &crate::scene::MaterialDesc,
+    optics: &MaterialOptics,
+    world_per_mm: f32,
+    lut_range_mm: f32,
+    profile_row: u32,
+) -> ObjectUniform {
+    let m = material;
+    ObjectUniform {
+        model: mat(Mat4::IDENTITY),
+        normal_matrix: mat(Mat4::IDENTITY),
+        albedo: std::array::from_fn(|c| optics.diffuse_albedo[c]),
+        roughness: m.roughness,
+        specular: m.specular,
+        sss_strength: m.sss_strength,
+        world_per_mm,
+        translucency: m.translucency,
+        has_albedo_map: 0,
+        has_normal_map: 0,
+        has_specular_map: 0,
         profile: profile_row,
         extinction: optics.sigma_t,
         lut_range_mm,

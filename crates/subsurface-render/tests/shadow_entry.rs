@@ -1,5 +1,6 @@
 //! The shadow entry pass (passes::shadow_entry) on a caller's z-buffer: the distance it writes
-//! follows the layer's matrix, and `set_layers` moves a layer as a new pass would.
+//! follows the layer's matrix, `set_layers` moves a layer as a new pass would, and
+//! `set_region` writes only its texels.
 
 mod common;
 
@@ -68,4 +69,38 @@ fn distances_follow_the_layer_and_set_layers_moves_it() {
         }
     }
     assert_eq!(after, fresh, "set_layers gives the fresh pass's maps");
+}
+
+#[test]
+fn set_region_writes_its_texels_only() {
+    let Some(ctx) = common::context() else { return };
+    let depth = util::texture_2d(
+        &ctx.device,
+        "caller's shadow map",
+        SIZE,
+        SIZE,
+        1,
+        wgpu::TextureFormat::Depth32Float,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let array = util::array_view(&depth);
+    let mut pass = ShadowEntryPass::new(&ctx.device, &array, SIZE, &[layer(Vec3::ZERO, 2.0)]);
+    // Reaching past the layer's edge: clipped to x 6..8, y 3..5.
+    pass.set_region(0, Some([6, 3, 5, 2]));
+    let values = distances(&ctx, &pass, &depth);
+    for (i, v) in values.iter().enumerate() {
+        let (x, y) = (i as u32 % SIZE, i as u32 / SIZE);
+        let inside = (6..8).contains(&x) && (3..5).contains(&y);
+        let want = if inside { 1.0 } else { f32::MAX };
+        assert!(
+            (v - want).abs() < 1e-4,
+            "texel ({x}, {y}): {v}, want {want}"
+        );
+    }
+    pass.set_region(0, None);
+    assert!(
+        distances(&ctx, &pass, &depth)
+            .iter()
+            .all(|v| (v - 1.0).abs() < 1e-4)
+    );
 }

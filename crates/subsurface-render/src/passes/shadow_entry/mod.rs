@@ -57,6 +57,8 @@ struct Layer {
     bind_group: wgpu::BindGroup,
     target: wgpu::TextureView,
     size: u32,
+    /// Texels written (x, y, width, height); `None`: the whole layer.
+    region: Option<[u32; 4]>,
 }
 
 /// Writes the skin's shadow maps from the caller's z-buffer (see the module's documentation).
@@ -126,6 +128,7 @@ impl ShadowEntryPass {
                     bind_group,
                     target: util::layer_view(&atlas, i as u32),
                     size: l.size,
+                    region: None,
                 }
             })
             .collect();
@@ -143,6 +146,16 @@ impl ShadowEntryPass {
         for (i, (layer, l)) in self.layers.iter_mut().zip(layers).enumerate() {
             layer.size = l.size;
             queue.write_buffer(&layer.uniform, 0, bytemuck::bytes_of(&entry_uniform(i, l)));
+        }
+    }
+
+    /// Writes only the texels `[x, y, width, height]` of layer `layer` (clipped to the layer;
+    /// `None`: all of it, as at creation); the others read as empty (nothing drawn there).
+    /// An engine whose cascade spans far more than its skin saves the rest: the pass costs
+    /// per texel.
+    pub fn set_region(&mut self, layer: usize, region: Option<[u32; 4]>) {
+        if let Some(l) = self.layers.get_mut(layer) {
+            l.region = region;
         }
     }
 
@@ -182,10 +195,16 @@ impl ShadowEntryPass {
                     timer.writes(),
                 );
                 pass.set_viewport(0.0, 0.0, layer.size as f32, layer.size as f32, 0.0, 1.0);
-                pass.set_scissor_rect(0, 0, layer.size, layer.size);
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &layer.bind_group, &[]);
-                pass.draw(0..3, 0..1);
+                let [x, y, w, h] = layer.region.unwrap_or([0, 0, layer.size, layer.size]);
+                let (x, y) = (x.min(layer.size), y.min(layer.size));
+                let (w, h) = (w.min(layer.size - x), h.min(layer.size - y));
+                // An empty region leaves the layer as cleared: every texel empty.
+                if w > 0 && h > 0 {
+                    pass.set_scissor_rect(x, y, w, h);
+                    pass.set_pipeline(&self.pipeline);
+                    pass.set_bind_group(0, &layer.bind_group, &[]);
+                    pass.draw(0..3, 0..1);
+                }
             }
             timer.end(profiler, encoder);
         }
