@@ -6,8 +6,9 @@
 //! cargo run --release -p subsurface-bevy --example hand -- --frames 30 --screenshot hand.png
 //! cargo run --release -p subsurface-bevy --example hand -- --bench
 //! ```
-//! Drag with the left button to orbit, scroll to zoom, S switches scattering, Q cycles the
-//! quality preset, Esc quits. The line at the top shows the plugin's GPU time.
+//! Drag with the left button to orbit, scroll to zoom, S switches scattering, T
+//! transmittance, Q cycles the quality preset, Esc quits. The line at the top shows the
+//! plugin's GPU time.
 
 #[path = "common/mod.rs"]
 mod common;

@@ -33,11 +33,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut app = App::new();
     app.add_plugins((
-        DefaultPlugins.set(WindowPlugin {
-            primary_window: None,
-            exit_condition: ExitCondition::DontExit,
-            ..default()
-        }),
+        // Headless: no window, and no winit event loop (the other examples' features add it).
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .disable::<bevy::winit::WinitPlugin>(),
         SubsurfacePlugin,
     ));
     // Without a window there is no runner: finish the plugins (the renderer starts

@@ -16,6 +16,7 @@ use bevy::pbr::{ExtractedDirectionalLight, LightEntity, ViewLightEntities, ViewS
 use bevy::platform::collections::HashMap;
 use bevy::render::RenderApp;
 use bevy::render::camera::ExtractedCamera;
+use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewDepthStencilTexture, ViewTarget};
 use subsurface_profile::KernelParams;
@@ -157,17 +158,7 @@ fn build_view(
     media: &SkinMedia,
 ) -> Result<ViewSss, SubsurfaceError> {
     let (w, h) = key.2;
-    let target = |label, format| {
-        util::texture_2d(
-            device,
-            label,
-            w,
-            h,
-            1,
-            format,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        )
-    };
+    let target = |label, format| util::render_target(device, label, w, h, format);
     let depth = target("subsurface linear depth", wgpu::TextureFormat::R32Float);
     let sss_tex = target("subsurface skin", sss::FORMAT);
     let transmit = if sub.transmittance {
@@ -415,7 +406,12 @@ fn subsurface_pass(
     };
     let clip_from_world = clip_from_view * world_from_view.inverse();
 
+    // The step's GPU time, as Bevy's render diagnostics report every pass's
+    // (`render/subsurface/elapsed_gpu` with `RenderDiagnosticsPlugin`; nothing without it).
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
     let encoder = ctx.command_encoder();
+    let span = diagnostics.time_span(encoder, "subsurface");
     {
         let attach =
             |view| util::color_attachment(view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT));
@@ -468,6 +464,7 @@ fn subsurface_pass(
     if let (true, Some(t)) = (transmitting, &v.transmit) {
         t.add_unscattered(transmit_pipelines, encoder);
     }
+    span.end(encoder);
 }
 
 /// Where the skin lies for the shadow maps: its world box, the margin around it (world

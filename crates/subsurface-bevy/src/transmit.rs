@@ -138,7 +138,7 @@ pub const CASCADE: usize = 0;
 /// pass), as in subsurface-render's `skin_in_your_renderer` example.
 pub(crate) fn settings(quality: crate::Quality) -> RenderSettings {
     let mut s = RenderSettings::preset(quality);
-    s.transmittance.lateral_texel_mm = 0.0;
+    s.transmitted_map.texel_mm = 0.0;
     s.sss.source_shift = false;
     s.bounce.ring = 0;
     s
@@ -327,16 +327,7 @@ impl Transmit {
         }
         let (w, h) = (main.width(), main.height());
         let target = |label, format| {
-            util::texture_2d(
-                device,
-                label,
-                w,
-                h,
-                1,
-                format,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-            .create_view(&Default::default())
+            util::render_target(device, label, w, h, format).create_view(&Default::default())
         };
         let f16 = lighting::RADIANCE_FORMAT;
         let scratch = target("subsurface unscattered", f16);
@@ -578,7 +569,7 @@ fn lights_uniform(
     // The skin's own scale, not subsurface-render's default scene's (0.5 mm there).
     u.normal_shrink = 0.5 * units_per_mm;
     u.lateral_taps = t.lateral_taps;
-    u.lateral_downsample = 1;
+    u.map_downsample = 1;
     u.sss_runs = 1;
     u.bounce_cell_mm = settings.bounce.cell_mm;
     for (i, l) in lights.iter().enumerate() {

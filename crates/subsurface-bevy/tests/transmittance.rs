@@ -139,37 +139,15 @@ fn render_with(transmittance: Option<bool>, shadows: bool, first_eye: Option<Vec
     image
 }
 
-/// Exact transport through slabs of skin1 (the Gaussian `skin` preset's medium), as
-/// subsurface-render tabulates it (its tests/transmittance.rs).
-fn skin1_table() -> subsurface_profile::TransportTable {
+/// What subsurface-render's `diffusion` sends toward the camera through `s_mm` of skin1 (the
+/// Gaussian `skin` preset's medium) per unit of back irradiance, at cosine `c` to the flow
+/// and exit cosine `mu_o`, by subsurface-profile's oracle (roughness 0.3, eta 1.3).
+fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
     let skin1 =
         subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
-    subsurface_profile::slab_transport(
-        &skin1,
-        subsurface_profile::TransmittanceLut::TRANSPORT_POINTS,
-        32.0,
-    )
-    .unwrap()
-}
-
-/// What subsurface-render's `diffusion` sends toward the camera through `s_mm` of skin1 per
-/// unit of back irradiance: exact transport's T_ms / albedo with the slab's angular shape at
-/// cosine `c` to the flow, times what the rough boundary (roughness 0.3, eta 1.3) lets out at
-/// exit cosine `mu_o` (as subsurface-render's tests/transmittance.rs computes it).
-fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
-    use subsurface_profile::{SlabSolver, TransmittanceLut};
-    let table = skin1_table();
-    let row = c.clamp(0.0, 1.0) * (SlabSolver::EXIT_ANGLES - 1) as f32;
-    let k = (row.floor() as usize).min(SlabSolver::EXIT_ANGLES - 2);
-    let f = row - k as f32;
-    let at = |k: usize| {
-        TransmittanceLut::transport_at(&table, 2048, k)
-            .unwrap()
-            .sample(s_mm)
-    };
-    let (a, b) = (at(k), at(k + 1));
-    let out = subsurface_profile::specular::rough_transmittance(f64::from(mu_o), 0.3, 1.3) as f32;
-    [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * out)
+    subsurface_profile::oracle::transmitted::SlabTransmission::new(&skin1, 32.0, 0.3, 1.3)
+        .unwrap()
+        .toward(s_mm, c, mu_o)
 }
 
 fn mean_gain(on: &[u8], off: &[u8], pixels: &[(u32, u32)]) -> [f64; 3] {

@@ -5,6 +5,7 @@ mod common;
 
 use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;
+use subsurface_profile::oracle::transmitted::SlabTransmission;
 use subsurface_profile::specular::{rough_transmittance, schlick};
 use subsurface_render::SssMethod;
 use subsurface_render::{DEFAULT_MAP_TEXEL_MM, TransmittanceMethod};
@@ -422,24 +423,10 @@ fn backlit_slab_transmits_the_exact_slab_transmittance() {
 }
 
 /// What `diffusion` sends toward the camera through `s_mm` of skin1 (the Gaussian skin
-/// preset's medium), by the CPU: exact transport's T_ms / albedo with the slab's angular shape
-/// at cosine `c` to the flow (the table's rows, blended as the GPU's filter blends them),
-/// times what the rough boundary (roughness 0.3, the material's default; eta 1.3) lets out at
-/// exit cosine `mu_o`.
+/// preset's medium) at cosine `c` to the flow and exit cosine `mu_o`, by the CPU oracle
+/// (roughness 0.3, the material's default; eta 1.3).
 fn skin1_transport_t(s_mm: f32, c: f32, mu_o: f32) -> [f32; 3] {
-    use subsurface_profile::{SlabSolver, TransmittanceLut};
-    let table = skin1_table();
-    let row = c.clamp(0.0, 1.0) * (SlabSolver::EXIT_ANGLES - 1) as f32;
-    let k = (row.floor() as usize).min(SlabSolver::EXIT_ANGLES - 2);
-    let f = row - k as f32;
-    let at = |k: usize| {
-        TransmittanceLut::transport_at(&table, 2048, k)
-            .unwrap()
-            .sample(s_mm)
-    };
-    let (a, b) = (at(k), at(k + 1));
-    let out = boundary_t(mu_o);
-    [0, 1, 2].map(|i| (a[i] * (1.0 - f) + b[i] * f) * out)
+    skin1_slab().toward(s_mm, c, mu_o)
 }
 
 /// The rough boundary's transmittance at cosine `mu` (roughness 0.3, eta 1.3).
@@ -448,16 +435,11 @@ fn boundary_t(mu: f32) -> f32 {
 }
 
 /// Exact transport through slabs of skin1 (the Gaussian skin preset's medium), as the renderer
-/// tabulates it.
-fn skin1_table() -> subsurface_profile::TransportTable {
+/// tabulates it, behind skin1's rough boundary.
+fn skin1_slab() -> SlabTransmission {
     let skin1 =
         subsurface_profile::Dipole::new([0.032, 0.17, 0.48], [0.74, 0.88, 1.01], 1.3).unwrap();
-    subsurface_profile::slab_transport(
-        &skin1,
-        subsurface_profile::TransmittanceLut::TRANSPORT_POINTS,
-        32.0,
-    )
-    .unwrap()
+    SlabTransmission::new(&skin1, 32.0, 0.3, SKIN1_ETA.into()).unwrap()
 }
 
 /// `diffusion` lights the back by the entry face's own irradiance, E cos(theta), from the normal
@@ -732,7 +714,8 @@ fn light_crossing_a_thin_neighbour_spreads_under_a_thick_part() {
         return;
     }
     use subsurface_profile::lateral::{DEFAULT_LATERAL_TAPS, lateral_transmittance};
-    let table = skin1_table();
+    let slab = skin1_slab();
+    let table = slab.table();
     let sigma = table.lateral_decay_per_mm();
     let with = stepped_block(DEFAULT_LATERAL_TAPS);
     let without = stepped_block(0);
@@ -748,7 +731,7 @@ fn light_crossing_a_thin_neighbour_spreads_under_a_thick_part() {
         let x = x_of(i);
         // The shader's frame across the light (0, 0, -1): t1 = +x, t2 = -y.
         let lateral =
-            lateral_transmittance(&table, chord, sigma, DEFAULT_LATERAL_TAPS, |rho, phi| {
+            lateral_transmittance(table, chord, sigma, DEFAULT_LATERAL_TAPS, |rho, phi| {
                 let (ex, ey) = (x + rho * phi.cos(), y - rho * phi.sin());
                 if ex.abs() >= 50.0 || ey.abs() >= 25.0 {
                     return None;

@@ -46,6 +46,9 @@ pub struct Args {
     /// Start without subsurface scattering (S toggles it).
     #[arg(long)]
     pub off: bool,
+    /// Start without light through thin parts (T toggles it).
+    #[arg(long)]
+    pub no_transmittance: bool,
 }
 
 /// The scene's radiometric units against Bevy's photometric ones: subsurface-render lights a
@@ -94,10 +97,21 @@ struct Run {
     frame: u32,
     quality: Quality,
     scattering: bool,
+    transmittance: bool,
     /// `--bench`: frame times and the plugin's GPU times, with the plugin and without.
     bench_on: Vec<f64>,
     bench_off: Vec<f64>,
     bench_gpu: Vec<f64>,
+}
+
+impl Run {
+    fn subsurface(&self) -> Subsurface {
+        Subsurface {
+            quality: self.quality,
+            units_per_mm: self.units_per_mm,
+            transmittance: self.transmittance,
+        }
+    }
 }
 
 /// The HUD line.
@@ -130,6 +144,7 @@ pub fn run(title: &str, scene: Scene, args: Args) -> AppExit {
     .insert_resource(Run {
         quality: args.quality,
         scattering: !args.off,
+        transmittance: !args.no_transmittance,
         args,
         units_per_mm,
         frame: 0,
@@ -243,10 +258,7 @@ fn spawn_scene(
         orbit,
     ));
     if run.scattering {
-        camera.insert(Subsurface {
-            quality: run.quality,
-            units_per_mm: run.units_per_mm,
-        });
+        camera.insert(run.subsurface());
     }
     for o in &scene.objects {
         let m = &o.material;
@@ -368,7 +380,7 @@ fn orbit(
     }
 }
 
-/// S: scattering on/off; Q: the next quality preset; Esc: quit.
+/// S: scattering on/off; T: transmittance on/off; Q: the next quality preset; Esc: quit.
 fn keys(
     keys: Res<ButtonInput<KeyCode>>,
     mut run: ResMut<Run>,
@@ -382,6 +394,10 @@ fn keys(
     let mut changed = false;
     if keys.just_pressed(KeyCode::KeyS) {
         run.scattering = !run.scattering;
+        changed = true;
+    }
+    if keys.just_pressed(KeyCode::KeyT) {
+        run.transmittance = !run.transmittance;
         changed = true;
     }
     if keys.just_pressed(KeyCode::KeyQ) {
@@ -403,10 +419,7 @@ fn set_scattering(
 ) {
     for camera in cameras {
         if on {
-            commands.entity(camera).insert(Subsurface {
-                quality: run.quality,
-                units_per_mm: run.units_per_mm,
-            });
+            commands.entity(camera).insert(run.subsurface());
         } else {
             commands.entity(camera).remove::<Subsurface>();
         }
@@ -421,9 +434,10 @@ fn hud(store: Res<DiagnosticsStore>, run: Res<Run>, mut text: Query<&mut Text, W
     let frame = ms(&store, &FrameTimeDiagnosticsPlugin::FRAME_TIME);
     let gpu = ms(&store, &GPU_TIME);
     let line = format!(
-        "subsurface {} ({}), GPU {}   frame {}   [S] scattering  [Q] quality  drag: orbit, wheel: zoom",
+        "subsurface {} ({}, transmittance {}): GPU {}   frame {}\n[S] scattering  [T] transmittance  [Q] quality  drag: orbit  wheel: zoom",
         if run.scattering { "on" } else { "off" },
         run.quality.name(),
+        if run.transmittance { "on" } else { "off" },
         gpu.filter(|_| run.scattering)
             .map_or("-".into(), |g| format!("{g:.3} ms")),
         frame.map_or("-".into(), |f| format!("{f:.1} ms")),

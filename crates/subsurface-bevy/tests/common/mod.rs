@@ -44,15 +44,20 @@ pub struct Headless {
     pub readback: Slot,
 }
 
-/// DefaultPlugins as built with this crate's features, without a primary window. The runner
-/// is never used: the tests call `update` themselves.
+/// DefaultPlugins without a primary window and without winit (the examples' dev-dependency
+/// features add it; its event loop refuses a test's thread). The runner is never used: the
+/// tests call `update` themselves.
 pub fn app() -> App {
     let mut app = App::new();
-    app.add_plugins(DefaultPlugins.set(WindowPlugin {
-        primary_window: None,
-        exit_condition: ExitCondition::DontExit,
-        ..default()
-    }));
+    app.add_plugins(
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .disable::<bevy::winit::WinitPlugin>(),
+    );
     app
 }
 

@@ -6,9 +6,11 @@
 //! * [`texture`]: the texture-space (UV) blur of d'Eon et al. 2007.
 //! * [`bounce`]: the flux pyramid of the shadow maps and the light between parts gathered
 //!   from it.
+//! * [`transmitted`]: the light `diffusion` sends through a slab toward the camera.
 
 pub mod bounce;
 pub mod screen;
 pub mod texture;
+pub mod transmitted;
 
 pub use screen::*;
