@@ -7,7 +7,7 @@ mod common;
 
 use bevy::prelude::*;
 use common::*;
-use subsurface_bevy::{Quality, Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
+use subsurface_bevy::{Quality, Subsurface, SubsurfacePlugin};
 
 fn render(with_subsurface: bool) -> Vec<u8> {
     let mut app = app();
@@ -25,17 +25,8 @@ fn render(with_subsurface: bool) -> Vec<u8> {
         setup(app, ())
     };
     let world = h.app.world_mut();
-    let skin = world
-        .resource_mut::<Assets<SkinMaterial>>()
-        .add(SkinMaterial {
-            base: StandardMaterial {
-                base_color: Color::WHITE,
-                perceptual_roughness: 0.8,
-                ..default()
-            },
-            // A profile millimetre of 10 cm on this 1 m sphere: the blur spans a few pixels.
-            extension: Skin::new("skin1", 100.0),
-        });
+    // A profile millimetre of 10 cm on this 1 m sphere: the blur spans a few pixels.
+    let skin = common::white_skin(world, "skin1", 100.0);
     // A bar along x, above the view, between the light and the sphere: a shadow stripe
     // across the sphere's lit upper front, through (0, 0.5, 0.866).
     let bar = world

@@ -10,7 +10,7 @@ mod common;
 use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;
 use common::*;
-use subsurface_bevy::{Quality, Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
+use subsurface_bevy::{Quality, Subsurface, SubsurfacePlugin};
 
 const THICKNESS_MM: f32 = 3.0;
 const SLAB: Vec3 = Vec3::new(-0.09, 0.0, 0.0);
@@ -53,16 +53,7 @@ fn render_with(transmittance: Option<bool>, shadows: bool, first_eye: Option<Vec
         brightness: 0.0,
         ..default()
     });
-    let skin = world
-        .resource_mut::<Assets<SkinMaterial>>()
-        .add(SkinMaterial {
-            base: StandardMaterial {
-                base_color: Color::WHITE,
-                perceptual_roughness: 0.8,
-                ..default()
-            },
-            extension: Skin::new("skin", 1.0),
-        });
+    let skin = common::white_skin(world, "skin", 1.0);
     let grey = world
         .resource_mut::<Assets<StandardMaterial>>()
         .add(StandardMaterial {

@@ -39,9 +39,8 @@ fn distances(ctx: &GpuContext, pass: &ShadowEntryPass, depth: &wgpu::Texture) ->
     texels.chunks(channels).map(|t| t[0]).collect()
 }
 
-#[test]
-fn distances_follow_the_layer_and_set_layers_moves_it() {
-    let Some(ctx) = common::context() else { return };
+/// The caller's one-layer `Depth32Float` shadow map and its array view.
+fn callers_shadow_map(ctx: &GpuContext) -> (wgpu::Texture, wgpu::TextureView) {
     let depth = util::texture_2d(
         &ctx.device,
         "caller's shadow map",
@@ -52,6 +51,13 @@ fn distances_follow_the_layer_and_set_layers_moves_it() {
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
     );
     let array = util::array_view(&depth);
+    (depth, array)
+}
+
+#[test]
+fn distances_follow_the_layer_and_set_layers_moves_it() {
+    let Some(ctx) = common::context() else { return };
+    let (depth, array) = callers_shadow_map(&ctx);
     let (near, far) = (layer(Vec3::ZERO, 2.0), layer(Vec3::new(0.0, 0.0, 3.0), 8.0));
     let fresh = distances(
         &ctx,
@@ -74,16 +80,7 @@ fn distances_follow_the_layer_and_set_layers_moves_it() {
 #[test]
 fn set_region_writes_its_texels_only() {
     let Some(ctx) = common::context() else { return };
-    let depth = util::texture_2d(
-        &ctx.device,
-        "caller's shadow map",
-        SIZE,
-        SIZE,
-        1,
-        wgpu::TextureFormat::Depth32Float,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-    );
-    let array = util::array_view(&depth);
+    let (depth, array) = callers_shadow_map(&ctx);
     let mut pass = ShadowEntryPass::new(&ctx.device, &array, SIZE, &[layer(Vec3::ZERO, 2.0)]);
     // Reaching past the layer's edge: clipped to x 6..8, y 3..5.
     pass.set_region(0, Some([6, 3, 5, 2]));

@@ -297,3 +297,22 @@ pub fn add_camera(h: &mut Headless, transform: Transform, extra: impl Bundle) ->
         });
     slot
 }
+
+/// A matte white skin material of `medium` at profile `width`: the tests read the light the
+/// skin adds, not its colour.
+pub fn white_skin(
+    world: &mut World,
+    medium: &str,
+    width: f32,
+) -> Handle<subsurface_bevy::SkinMaterial> {
+    world
+        .resource_mut::<Assets<subsurface_bevy::SkinMaterial>>()
+        .add(subsurface_bevy::SkinMaterial {
+            base: StandardMaterial {
+                base_color: Color::WHITE,
+                perceptual_roughness: 0.8,
+                ..default()
+            },
+            extension: subsurface_bevy::Skin::new(medium, width),
+        })
+}
