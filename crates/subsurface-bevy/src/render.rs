@@ -419,14 +419,7 @@ fn subsurface_pass(
         if let Some(t) = &v.transmit {
             targets.extend([attach(&t.normal), attach(&t.albedo)]);
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("subsurface mark"),
-            color_attachments: &targets,
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = util::color_pass(encoder, "subsurface mark", &targets, None);
         pass.set_pipeline(&mark[usize::from(v.transmit.is_some())]);
         pass.set_bind_group(0, &v.mark_bind_group, &[]);
         pass.draw(0..3, 0..1);

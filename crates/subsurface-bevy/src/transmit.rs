@@ -28,7 +28,9 @@ use glam::{Mat4, Vec3};
 use subsurface_render::material::MaterialCache;
 use subsurface_render::passes::lighting::{self, ShadowMaps};
 use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};
-use subsurface_render::passes::transmitted_light::{SkinGBuffer, SkinMedium, TransmittedLightPass};
+use subsurface_render::passes::transmitted_light::{
+    GBufferGroup, SkinGBuffer, SkinMedium, TransmittedLightPass,
+};
 use subsurface_render::passes::{fullscreen, maps, util};
 use subsurface_render::scene::MaterialDesc;
 use subsurface_render::uniforms::{CameraUniform, LightUniform, LightsUniform, MAX_LIGHTS};
@@ -283,8 +285,8 @@ pub(crate) struct Transmit {
     add_bind_group: wgpu::BindGroup,
     main_view: wgpu::TextureView,
     shadows: Option<Shadows>,
-    /// The G-buffer's bind group, for the camera matrix it was made with.
-    gbuffer: Option<(BevyMat4, wgpu::BindGroup)>,
+    /// The G-buffer's group (made on the first frame, its camera matrix rewritten after).
+    gbuffer: Option<GBufferGroup>,
 }
 
 /// What the frame's transmittance draws with.
@@ -401,36 +403,29 @@ impl Transmit {
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&frame.camera));
         let uniform = lights_uniform(lights, &self.settings, frame.units_per_mm, size);
         queue.write_buffer(&self.lights, 0, bytemuck::bytes_of(&uniform));
-        if self
-            .gbuffer
-            .as_ref()
-            .is_none_or(|(m, _)| *m != frame.clip_from_world)
-        {
-            let gbuffer = SkinGBuffer {
-                depth: frame.depth,
-                normal: &self.normal,
-                albedo: &self.albedo,
-                medium: frame.sss,
-            };
-            let bind_group = self
-                .pass
-                .bind_gbuffer(device, &gbuffer, mat(frame.clip_from_world));
-            self.gbuffer = Some((frame.clip_from_world, bind_group));
+        // The G-buffer's textures are this view's for its life; only the camera moves.
+        let view_proj = mat(frame.clip_from_world);
+        match &self.gbuffer {
+            Some(g) => g.set_view_proj(queue, view_proj),
+            None => {
+                let gbuffer = SkinGBuffer {
+                    depth: frame.depth,
+                    normal: &self.normal,
+                    albedo: &self.albedo,
+                    medium: frame.sss,
+                };
+                self.gbuffer = Some(self.pass.bind_gbuffer(device, &gbuffer, view_proj));
+            }
         }
 
         for (copy, light) in shadows.copies.iter().zip(lights) {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("subsurface forward z"),
-                color_attachments: &[],
-                depth_stencil_attachment: util::depth_attachment(
-                    &copy.target,
-                    wgpu::LoadOp::Clear(1.0),
-                    wgpu::StoreOp::Store,
-                ),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = util::depth_pass(
+                encoder,
+                "subsurface forward z",
+                &copy.target,
+                wgpu::LoadOp::Clear(1.0),
+                None,
+            );
             // Outside the region the layer stays cleared: empty.
             let [x, y, w, h] = light.region;
             if w > 0 && h > 0 {
@@ -442,22 +437,20 @@ impl Transmit {
         }
         shadows.entry.encode(encoder, None);
         // The scratch target starts each frame empty; the pass adds into it.
-        drop(encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("subsurface clear unscattered"),
-            color_attachments: &[util::color_attachment(
+        drop(util::color_pass(
+            encoder,
+            "subsurface clear unscattered",
+            &[util::color_attachment(
                 &self.scratch,
                 wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
             )],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        }));
-        if let Some((_, gbuffer)) = &self.gbuffer {
+            None,
+        ));
+        if let Some(gbuffer) = &self.gbuffer {
             self.pass.encode(
                 encoder,
                 &shadows.frame,
-                gbuffer,
+                &gbuffer.bind_group,
                 &self.media,
                 [&self.main_view, &self.scratch],
                 None,
@@ -467,14 +460,12 @@ impl Transmit {
 
     /// Adds the unscattered part onto the main texture; run after the blur.
     pub fn add_unscattered(&self, pipelines: &Pipelines, encoder: &mut wgpu::CommandEncoder) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("subsurface add unscattered"),
-            color_attachments: &[util::color_attachment(&self.main_view, wgpu::LoadOp::Load)],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = util::color_pass(
+            encoder,
+            "subsurface add unscattered",
+            &[util::color_attachment(&self.main_view, wgpu::LoadOp::Load)],
+            None,
+        );
         pass.set_pipeline(&pipelines.add);
         pass.set_bind_group(0, &self.add_bind_group, &[]);
         pass.draw(0..3, 0..1);

@@ -720,7 +720,7 @@ pub fn render(
         transmitted.encode(
             &mut encoder,
             &frame,
-            &gbuffer,
+            &gbuffer.bind_group,
             &media,
             [&views[0], &views[1]],
             p,

@@ -131,6 +131,25 @@ impl SkinMedium {
     }
 }
 
+/// Group 2 of [`TransmittedLightPass`]: the caller's G-buffer and the camera's inverse
+/// view-projection, which unprojects each pixel's depth.
+pub struct GBufferGroup {
+    /// The bind group [`TransmittedLightPass::encode`] takes.
+    pub bind_group: wgpu::BindGroup,
+    view: wgpu::Buffer,
+}
+
+impl GBufferGroup {
+    /// The camera moved: its new view-projection (`CameraUniform`'s), written in place.
+    pub fn set_view_proj(&self, queue: &wgpu::Queue, view_proj: Mat4) {
+        queue.write_buffer(
+            &self.view,
+            0,
+            bytemuck::cast_slice(&view_proj.inverse().to_cols_array()),
+        );
+    }
+}
+
 /// Adds transmitted light to a caller's targets (see the module's documentation).
 pub struct TransmittedLightPass {
     pipeline: wgpu::RenderPipeline,
@@ -213,30 +232,33 @@ impl TransmittedLightPass {
     }
 
     /// Group 2 from the caller's G-buffer; `view_proj` is the camera's (`CameraUniform`'s).
+    /// Made once per set of G-buffer textures: a moving camera only needs
+    /// [`GBufferGroup::set_view_proj`].
     pub fn bind_gbuffer(
         &self,
         device: &wgpu::Device,
         gbuffer: &SkinGBuffer<'_>,
         view_proj: Mat4,
-    ) -> wgpu::BindGroup {
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    ) -> GBufferGroup {
+        let view = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("skin view"),
             contents: bytemuck::cast_slice(&view_proj.inverse().to_cols_array()),
-            usage: wgpu::BufferUsages::UNIFORM,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let view = wgpu::BindingResource::TextureView;
-        util::bind_group(
+        let texture = wgpu::BindingResource::TextureView;
+        let bind_group = util::bind_group(
             device,
             "skin g-buffer",
             &self.gbuffer_layout,
             [
-                (16, uniform.as_entire_binding()),
-                (17, view(gbuffer.depth)),
-                (18, view(gbuffer.normal)),
-                (19, view(gbuffer.albedo)),
-                (20, view(gbuffer.medium)),
+                (16, view.as_entire_binding()),
+                (17, texture(gbuffer.depth)),
+                (18, texture(gbuffer.normal)),
+                (19, texture(gbuffer.albedo)),
+                (20, texture(gbuffer.medium)),
             ],
-        )
+        );
+        GBufferGroup { bind_group, view }
     }
 
     /// Adds the transmitted light (and the bounce) of every medium into `diffuse` and
