@@ -69,7 +69,15 @@ impl Terms {
         Self(
             bit(t.ballistic, Self::BALLISTIC)
                 | bit(t.single_scattering, Self::SINGLE_SCATTERING)
-                | bit(settings.sss.source_shift, Self::SOURCE_SHIFT),
+                // Without a blur the shift has nothing to feed (the shader tests it at run time
+                // too), but code a pipeline holds costs even where it does not run: on
+                // llvmpipe, whose branches mask rather than jump, the unreached lookups were a
+                // third of the lighting pass of a frame without scattering.
+                | bit(
+                    settings.sss.source_shift
+                        && settings.sss.method != crate::settings::SssMethod::None,
+                    Self::SOURCE_SHIFT,
+                ),
         )
     }
 }
@@ -144,5 +152,20 @@ mod tests {
         );
         // Every method has its id (a new method needs one).
         assert_eq!(methods.len(), TransmittanceMethod::ALL.len());
+    }
+
+    /// A frame without a blur builds its lighting pipeline without the source shift's
+    /// lookups, whatever `sss.source_shift` says; with a blur the key decides.
+    #[test]
+    fn the_source_shift_is_compiled_only_where_a_blur_reads_it() {
+        use crate::settings::{RenderSettings, SssMethod};
+        let mut s = RenderSettings::default();
+        s.sss.source_shift = true;
+        assert_ne!(Terms::of(&s).0 & Terms::SOURCE_SHIFT, 0);
+        s.sss.method = SssMethod::None;
+        assert_eq!(Terms::of(&s).0 & Terms::SOURCE_SHIFT, 0);
+        s.sss.method = SssMethod::Separable;
+        s.sss.source_shift = false;
+        assert_eq!(Terms::of(&s).0 & Terms::SOURCE_SHIFT, 0);
     }
 }

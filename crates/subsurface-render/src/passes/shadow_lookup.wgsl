@@ -70,22 +70,34 @@ fn gather_weights(wx: vec2<f32>, wy: vec2<f32>) -> vec4<f32> {
     return vec4<f32>(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x);
 }
 
+// Where `p` falls on `light`'s map `sc`, in texels (centres at .5), and the depth it is
+// compared with: its projected depth after moving it shadow_bias toward the light, which
+// along its ray is the same test as distance - bias <= occluder distance. Beyond the far
+// plane nothing was drawn (cleared to 1): lit.
+struct ShadowTest {
+    texel: vec2<f32>,
+    reference: f32,
+};
+
+fn shadow_test(light: Light, sc: ShadowCoord, p: vec3<f32>) -> ShadowTest {
+    let to_light = light_direction(light.kind, light.position, light.direction, p);
+    let biased = face_matrix(light, sc.face) * vec4<f32>(p + to_light * light.shadow_bias, 1.0);
+    let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
+    return ShadowTest(sc.uv * size - vec2<f32>(0.5), min(biased.z / max(biased.w, 1e-20), 1.0));
+}
+
 // Percentage-closer filtering over a 3x3 texel area with bilinear weights: a tent of 4x4
 // texels, weights (1 - f, 1, 1, f) per axis. The comparison sampler's gather tests a 2x2 block
 // of texels in one fetch, so four fetches do what sixteen loads and compares did, with the
-// same weights. The receiver's depth is its projected depth after moving it shadow_bias toward
-// the light, which along its ray is the same test as distance - bias <= occluder distance.
+// same weights.
 fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     let sc = shadow_coord(light, p);
     if (!sc.inside) {
         return 1.0;
     }
-    let to_light = light_direction(light.kind, light.position, light.direction, p);
-    let biased = face_matrix(light, sc.face) * vec4<f32>(p + to_light * light.shadow_bias, 1.0);
-    // Beyond the far plane nothing was drawn (cleared to 1): lit, as before.
-    let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
-    let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
-    let t = sc.uv * size - vec2<f32>(0.5);
+    let test = shadow_test(light, sc, p);
+    let t = test.texel;
+    let reference = test.reference;
     let base = floor(t) - vec2<f32>(1.0);
     let f = t - floor(t);
     // Weights of the four texels a gather returns: x = (left, bottom), y = (right, bottom),
@@ -103,6 +115,22 @@ fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     lit += dot(shadow_gather(corner + vec2<f32>(0.0, step), sc.layer, reference), gather_weights(wx0, wy1));
     lit += dot(shadow_gather(corner + vec2<f32>(step, step), sc.layer, reference), gather_weights(wx1, wy1));
     return lit / 9.0;
+}
+
+// Percentage-closer filtering over the 2x2 texels around `p` with bilinear weights: one
+// gather. The diffusion source's shifted lookups take it: what they feed is blurred by the
+// profile, which hides the narrower penumbra, and the tent's four gathers per lookup were
+// most of the shift's cost.
+fn shadow_factor_bilinear(light: Light, p: vec3<f32>) -> f32 {
+    let sc = shadow_coord(light, p);
+    if (!sc.inside) {
+        return 1.0;
+    }
+    let test = shadow_test(light, sc, p);
+    let f = test.texel - floor(test.texel);
+    let corner = (floor(test.texel) + vec2<f32>(1.0)) * light.atlas_texel;
+    let weights = gather_weights(vec2<f32>(1.0 - f.x, f.x), vec2<f32>(1.0 - f.y, f.y));
+    return dot(shadow_gather(corner, sc.layer, test.reference), weights);
 }
 
 // The optional terms this pipeline evaluates, a bit each (overrides.rs, `Terms`): 1
@@ -134,11 +162,11 @@ fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
         return vec3<f32>(shadow);
     }
     let step = along / len * (tan_t * object.world_per_mm);
-    let red = shadow_factor(light, p + step / object.extinction.x);
+    let red = shadow_factor_bilinear(light, p + step / object.extinction.x);
     if (red == shadow) {
         return vec3<f32>(shadow);
     }
-    let green = shadow_factor(light, p + step / object.extinction.y);
-    let blue = shadow_factor(light, p + step / object.extinction.z);
+    let green = shadow_factor_bilinear(light, p + step / object.extinction.y);
+    let blue = shadow_factor_bilinear(light, p + step / object.extinction.z);
     return vec3<f32>(red, green, blue);
 }
