@@ -12,6 +12,7 @@ use std::sync::{Arc, Mutex};
 
 use bevy::app::PluginsState;
 use bevy::camera::{Hdr, RenderTarget};
+use bevy::color::ColorToPacked;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::light::{CascadeShadowConfigBuilder, ShadowFilteringMethod};
 use bevy::prelude::*;
@@ -143,19 +144,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         previous = Some(current);
     };
 
-    let srgb = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        let s = if v <= 0.0031308 {
-            12.92 * v
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
     let img = image::RgbImage::from_fn(SIZE.0, SIZE.1, |x, y| {
         let i = 8 * (y * SIZE.0 + x) as usize;
-        let c = |k: usize| half::f16::from_le_bytes([data[i + 2 * k], data[i + 2 * k + 1]]);
-        image::Rgb([0, 1, 2].map(|k| srgb(c(k).to_f32())))
+        let c =
+            |k: usize| half::f16::from_le_bytes([data[i + 2 * k], data[i + 2 * k + 1]]).to_f32();
+        let linear = LinearRgba::rgb(c(0), c(1), c(2));
+        image::Rgb(Srgba::from(linear).to_u8_array_no_alpha())
     });
     img.save(&out)?;
     println!("wrote {out}");

@@ -22,3 +22,17 @@ fn fs_forward_z(in: FullscreenOut) -> @builtin(frag_depth) f32 {
     }
     return 1.0 - d;
 }
+
+// fs_forward_z_view: the same from a one-layer view (a spot light's map, which Bevy places
+// after every camera's cascades). Its infinite perspective is reverse-Z too (d = near /
+// depth, cleared to 0), so 1 - d is the forward-Z depth of forward_z's matrix as well.
+@group(0) @binding(2) var bevy_view_depth: texture_depth_2d;
+
+@fragment
+fn fs_forward_z_view(in: FullscreenOut) -> @builtin(frag_depth) f32 {
+    let d = textureLoad(bevy_view_depth, vec2<i32>(in.clip.xy), 0);
+    if (d <= 0.0 || d >= 1.0) {
+        return 1.0;
+    }
+    return 1.0 - d;
+}

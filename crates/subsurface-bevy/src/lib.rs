@@ -35,12 +35,13 @@
 //!    depth buffer and that marker into subsurface-render's inputs (linear depth; strength,
 //!    scale, profile row) and runs `SssPass` on the HDR texture itself.
 //!    With [`Subsurface::transmittance`] (the default), the step first adds the light that
-//!    crosses thin backlit skin, read from Bevy's directional shadow maps ([`transmit`]).
+//!    crosses thin backlit skin, read from Bevy's directional, spot and point shadow maps
+//!    ([`transmit`]).
 //! 3. Bevy's transparent pass then adds the skin's specular light, drawn by a child entity
 //!    ([`SkinSpecular`]) with an additive twin of the material: highlights stay sharp.
 //!
-//! Limits of this version: transmittance from directional lights only (one cascade each),
-//! with each material row's base colour as albedo; cameras need `Msaa::Off` (the plugin sets
+//! Limits of this version: transmittance reads one cascade of each directional light and
+//! takes each material row's base colour as albedo; cameras need `Msaa::Off` (the plugin sets
 //! it) and a perspective projection; each skin mesh is drawn twice in the main passes.
 
 use bevy::app::{App, Plugin, PostUpdate};
@@ -57,6 +58,7 @@ use bevy::render::view::Msaa;
 
 mod material;
 pub mod render;
+mod shadow_lights;
 pub mod transmit;
 
 pub use material::{Skin, SkinMaterial, SkinMedia, SkinRow, SkinSpecular};
@@ -88,9 +90,10 @@ pub struct Subsurface {
     /// Scene units per millimetre of skin. Bevy's unit is the metre, so 0.001; a skin
     /// material's width multiplies it.
     pub units_per_mm: f32,
-    /// Light through thin backlit skin (ears, fingers) from the camera's shadow-casting
-    /// directional lights, read from Bevy's shadow maps (the first cascade of each: see
-    /// [`transmit::CASCADE`]). On by default; a camera without such a light skips it.
+    /// Light through thin backlit skin (ears, fingers) from the shadow-casting directional,
+    /// spot and point lights, read from Bevy's shadow maps (a directional light's first
+    /// cascade: see [`transmit::CASCADE`]). On by default; a camera without such a light
+    /// skips it.
     pub transmittance: bool,
 }
 

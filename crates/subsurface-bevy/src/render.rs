@@ -12,7 +12,10 @@ use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
-use bevy::pbr::{ExtractedDirectionalLight, LightEntity, ViewLightEntities, ViewShadowBindings};
+use bevy::pbr::{
+    ExtractedDirectionalLight, ExtractedPointLight, LightEntity, ShadowView, ViewLightEntities,
+    ViewShadowBindings,
+};
 use bevy::platform::collections::HashMap;
 use bevy::render::RenderApp;
 use bevy::render::camera::ExtractedCamera;
@@ -27,7 +30,8 @@ use subsurface_render::scene::MaterialDesc;
 use subsurface_render::{RenderSettings, SssFetch, SssSettings};
 
 use crate::material::{MAX_ROWS, SkinMedia};
-use crate::transmit::{self, DirectionalShadow, Transmit};
+use crate::shadow_lights::{self, Reach};
+use crate::transmit::{self, Transmit};
 use crate::{Subsurface, SubsurfaceError};
 
 const MARK_WGSL: &str = include_str!("mark.wgsl");
@@ -243,7 +247,7 @@ type ViewSssKey = (
 );
 
 /// What the step reads of its camera: the view, its targets, the settings, the exposure (for
-/// the lights' units) and its directional shadow maps with their cascades' views.
+/// the lights' units), its shadow maps and the cascades of its directional lights.
 type StepView = (
     &'static ExtractedView,
     &'static ViewTarget,
@@ -261,6 +265,8 @@ fn subsurface_pass(
     view: ViewQuery<StepView>,
     light_views: Query<&LightEntity>,
     directional: Query<&ExtractedDirectionalLight>,
+    shadow_views: Query<(&LightEntity, &ShadowView, &ExtractedView)>,
+    point_lights: Query<&ExtractedPointLight>,
     media: Option<Res<SkinMedia>>,
     bounds: Option<Res<transmit::SkinBounds>>,
     mut state: ResMut<SubsurfaceViews>,
@@ -389,7 +395,8 @@ fn subsurface_pass(
     // Focal length in pixels: clip_from_view's y scale is 1 / tan(fov_y / 2).
     let focal_px = 0.5 * size.1 as f32 * clip_from_view.y_axis.y;
     v.pass.prepare(queue, focal_px);
-    // The camera's shadow-casting directional lights, in the layers of Bevy's texture.
+    // The camera's shadow-casting directional lights, in the layers of Bevy's texture, then
+    // the shadow-casting spot and point lights.
     let skin_box = bounds.and_then(|b| b.0);
     let lights = match (&v.transmit, light_entities, shadow_bindings, skin_box) {
         (Some(_), Some(views), Some(bindings), Some(skin_box)) => {
@@ -398,9 +405,16 @@ fn subsurface_pass(
                 skin_box,
                 margin: transmit::MARGIN_MM * sub.units_per_mm * widest,
                 size: bindings.directional_light_depth_texture.width(),
+                exposure: camera.map_or(1.0, |c| c.exposure),
             };
-            let exposure = camera.map_or(1.0, |c| c.exposure);
-            directional_shadows(entity, views, &light_views, &directional, exposure, &reach)
+            let mut lights =
+                shadow_lights::directional(entity, views, &light_views, &directional, &reach);
+            lights.extend(shadow_lights::spot_and_point(
+                &shadow_views,
+                &point_lights,
+                &reach,
+            ));
+            lights
         }
         _ => Vec::new(),
     };
@@ -425,7 +439,8 @@ fn subsurface_pass(
         pass.draw(0..3, 0..1);
     }
     // Transmitted light joins the diffuse light before the blur; its unscattered part is
-    // added after it. Without a shadow-casting directional light there is nothing to add.
+    // added after it. Without a shadow-casting light there is nothing to
+    // add.
     let transmitting = match (&mut v.transmit, shadow_bindings) {
         (Some(t), Some(bindings)) if !lights.is_empty() => {
             let forward = world_from_view.transform_vector3(bevy::math::Vec3::NEG_Z);
@@ -458,75 +473,4 @@ fn subsurface_pass(
         t.add_unscattered(transmit_pipelines, encoder);
     }
     span.end(encoder);
-}
-
-/// Where the skin lies for the shadow maps: its world box, the margin around it (world
-/// units), the maps' size.
-struct Reach {
-    skin_box: (bevy::math::Vec3, bevy::math::Vec3),
-    margin: f32,
-    size: u32,
-}
-
-/// The camera's shadow-casting directional lights as transmittance reads them: for each, the
-/// layer of Bevy's directional shadow texture that holds its cascade [`transmit::CASCADE`]
-/// (the camera's `ViewLightEntities` lists the cascades in layer order), and that cascade's
-/// matrices from the extracted light.
-fn directional_shadows(
-    view: Entity,
-    views: &ViewLightEntities,
-    light_views: &Query<&LightEntity>,
-    directional: &Query<&ExtractedDirectionalLight>,
-    exposure: f32,
-    reach: &Reach,
-) -> Vec<DirectionalShadow> {
-    let mut lights = Vec::new();
-    for (layer, e) in views.lights.iter().enumerate() {
-        let Ok(LightEntity::Directional {
-            light_entity,
-            cascade_index,
-        }) = light_views.get(*e)
-        else {
-            continue;
-        };
-        if *cascade_index != transmit::CASCADE {
-            continue;
-        }
-        let Ok(light) = directional.get(*light_entity) else {
-            continue;
-        };
-        let Some(cascade) = light
-            .cascades
-            .get(&view)
-            .and_then(|c| c.get(transmit::CASCADE))
-        else {
-            continue;
-        };
-        if !light.shadow_maps_enabled {
-            continue;
-        }
-        let to_glam = |v: bevy::math::Vec3| glam::Vec3::from_array(v.to_array());
-        let direction = light
-            .transform
-            .to_matrix()
-            .transform_vector3(bevy::math::Vec3::NEG_Z)
-            .normalize();
-        let c = light.color;
-        let scale = light.illuminance * exposure / std::f32::consts::PI;
-        lights.push(DirectionalShadow {
-            bevy_layer: layer as u32,
-            clip_from_world: cascade.clip_from_world,
-            origin: to_glam(cascade.world_from_cascade.w_axis.truncate()),
-            direction: to_glam(direction),
-            color: [c.red * scale, c.green * scale, c.blue * scale],
-            texel_size: cascade.texel_size,
-            region: transmit::region(
-                cascade.clip_from_world,
-                reach.size,
-                reach.skin_box,
-                reach.margin,
-            ),
-        });
-    }
-    lights
 }

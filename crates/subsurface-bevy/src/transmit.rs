@@ -1,13 +1,16 @@
 //! Transmittance: light through thin backlit skin (ears, fingers), from Bevy's own
-//! directional shadow maps, for each [`crate::Subsurface`] camera with `transmittance` on.
+//! directional and spot shadow maps, for each [`crate::Subsurface`] camera with
+//! `transmittance` on.
 //!
 //! Per frame, inside the render step (render.rs), after the mark pass has written linear
 //! depth, the SSS texture and a G-buffer (world normal rebuilt from the depth buffer, the
 //! row's albedo):
 //! 1. one cascade per shadow-casting directional light (the first, the finest: see
-//!    [`CASCADE`]) is copied out of `ViewShadowBindings::directional_light_depth_texture`
-//!    into a forward-Z `Depth32Float` array of ours (forward_z.wgsl), the z-buffer layout
-//!    subsurface-render's shadow entry pass and shadow lookups read;
+//!    [`crate::shadow_lights::CASCADE`]), each shadow-casting spot light's map and each
+//!    shadow-casting point light's six cube faces are copied out of Bevy's shadow textures
+//!    (`ViewShadowBindings`) into a forward-Z
+//!    `Depth32Float` array of ours (forward_z.wgsl), the z-buffer layout subsurface-render's
+//!    shadow entry pass and shadow lookups read;
 //! 2. `ShadowEntryPass` turns it into the skin's shadow maps (light distance, entry normal);
 //! 3. `TransmittedLightPass` adds the transmitted light into the main texture (diffuse,
 //!    blurred next by `SssPass`) and its unscattered part into a scratch texture, which
@@ -15,7 +18,8 @@
 //!
 //! Units: subsurface-render's radiance is albedo x irradiance (no 1/pi); Bevy's Lambert
 //! lobe is albedo / pi x illuminance x exposure. So each light's colour is Bevy's colour x
-//! illuminance x the camera's exposure / pi, and every output lands in Bevy's units.
+//! illuminance (a spot or point light's: intensity) x the camera's exposure / pi, and every output
+//! lands in Bevy's units.
 
 use bevy::camera::primitives::Aabb;
 use bevy::ecs::prelude::*;
@@ -24,7 +28,7 @@ use bevy::pbr::MeshMaterial3d;
 use bevy::render::RenderApp;
 use bevy::render::extract_resource::ExtractResource;
 use bevy::transform::components::GlobalTransform;
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 use subsurface_render::material::MaterialCache;
 use subsurface_render::passes::lighting::{self, ShadowMaps};
 use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};
@@ -38,6 +42,8 @@ use subsurface_render::{RenderSettings, gpu_scene};
 
 use crate::SubsurfaceError;
 use crate::material::{SkinMaterial, SkinMedia, SkinSpecular};
+pub use crate::shadow_lights::CASCADE;
+use crate::shadow_lights::{FaceMap, LightShadow, MapSource};
 
 /// The world-space box around every skin mesh (main world, extracted each frame it
 /// changes): the copy and entry passes draw only the texels of Bevy's cascade that it covers,
@@ -91,48 +97,8 @@ pub(crate) fn skin_bounds(
     bounds.set_if_neq(SkinBounds(b));
 }
 
-/// The texels `[x, y, width, height]` of a `size`² cascade map (`clip_from_world`) that the
-/// box `bounds` covers, grown by `margin` world units; empty when it lies outside.
-pub(crate) fn region(
-    clip_from_world: BevyMat4,
-    size: u32,
-    (lo, hi): (BevyVec3, BevyVec3),
-    margin: f32,
-) -> [u32; 4] {
-    let (lo, hi) = (lo - BevyVec3::splat(margin), hi + BevyVec3::splat(margin));
-    let (mut min, mut max) = (bevy::math::Vec2::splat(f32::MAX), bevy::math::Vec2::MIN);
-    for i in 0..8 {
-        let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
-        let corner = BevyVec3::new(
-            pick(1, lo.x, hi.x),
-            pick(2, lo.y, hi.y),
-            pick(4, lo.z, hi.z),
-        );
-        let ndc = clip_from_world.project_point3(corner);
-        let uv = bevy::math::Vec2::new(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
-        min = min.min(uv);
-        max = max.max(uv);
-    }
-    // Whole texels, and one more each side for the entry pass's neighbours.
-    let s = size as f32;
-    let x0 = (min.x * s - 1.0).floor().clamp(0.0, s) as u32;
-    let y0 = (min.y * s - 1.0).floor().clamp(0.0, s) as u32;
-    let x1 = (max.x * s + 1.0).ceil().clamp(0.0, s) as u32;
-    let y1 = (max.y * s + 1.0).ceil().clamp(0.0, s) as u32;
-    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
-}
-
 const FORWARD_Z_WGSL: &str = include_str!("forward_z.wgsl");
 const ADD_WGSL: &str = include_str!("add.wgsl");
-
-/// `KIND_DIRECTIONAL` of subsurface-render's common.wgsl.
-const KIND_DIRECTIONAL: f32 = 2.0;
-
-/// The cascade of each directional light that transmittance reads: the first, whose texels
-/// are the finest (a Bevy cascade spans its slice of the view frustum with the same number
-/// of texels, so later ones are coarser than most thin parts). Skin beyond its far bound
-/// (`CascadeShadowConfig::bounds[0]`) gets no transmitted light.
-pub const CASCADE: usize = 0;
 
 /// The render settings transmittance runs with: the quality preset's, with what this
 /// integration does not have turned off (the bounce needs a flux pyramid, the lateral map
@@ -146,32 +112,14 @@ pub(crate) fn settings(quality: crate::Quality) -> RenderSettings {
     s
 }
 
-/// One directional light as the transmittance reads it, from Bevy's extracted data.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct DirectionalShadow {
-    /// The layer of Bevy's directional shadow texture that holds the chosen cascade.
-    pub bevy_layer: u32,
-    /// That cascade's `clip_from_world` (reverse-Z orthographic).
-    pub clip_from_world: BevyMat4,
-    /// The cascade's origin (its near plane's centre, world space): distances along the
-    /// light are measured from it.
-    pub origin: Vec3,
-    /// Unit direction, light to target.
-    pub direction: Vec3,
-    /// Linear colour x illuminance x exposure / pi (see the module's documentation).
-    pub color: [f32; 3],
-    /// The cascade's texel size, world units.
-    pub texel_size: f32,
-    /// The texels the skin covers (see [`region`]).
-    pub region: [u32; 4],
-}
-
 fn mat(m: BevyMat4) -> Mat4 {
     Mat4::from_cols_array(&m.to_cols_array())
 }
 
-/// Bevy's reverse-Z clip space to the forward-Z one our copy holds: z -> w - z (the copy
-/// writes 1 - d; for an orthographic cascade w = 1).
+/// Bevy's reverse-Z clip space to the forward-Z one our copy holds: z -> w - z, so that
+/// z / w becomes 1 - d as the copy writes (an orthographic cascade has w = 1; a spot light's
+/// infinite perspective has d = near / depth, and 1 - d still rises from 0 at the near plane
+/// to 1 at infinity).
 fn forward_z(clip_from_world: BevyMat4) -> Mat4 {
     let flip = Mat4::from_cols(
         glam::Vec4::X,
@@ -184,7 +132,10 @@ fn forward_z(clip_from_world: BevyMat4) -> Mat4 {
 
 /// The pipelines every camera shares.
 pub(crate) struct Pipelines {
+    /// The copy from a layer of Bevy's texture (a cascade) ...
     forward_z: wgpu::RenderPipeline,
+    /// ... and from a one-layer view of it (a spot light's map).
+    forward_z_view: wgpu::RenderPipeline,
     add: wgpu::RenderPipeline,
 }
 
@@ -194,33 +145,37 @@ impl Pipelines {
             util::wgsl_module(device, label, &format!("{}{wgsl}", fullscreen::VERTEX_WGSL))
         };
         let copy = module("subsurface forward z", FORWARD_Z_WGSL);
-        let forward_z = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("subsurface forward z"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &copy,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &copy,
-                entry_point: Some("fs_forward_z"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let forward_z = |entry| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("subsurface forward z"),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &copy,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &copy,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let (forward_z, forward_z_view) =
+            (forward_z("fs_forward_z"), forward_z("fs_forward_z_view"));
         let add_module = module("subsurface add unscattered", ADD_WGSL);
         // Colour added, destination alpha kept (it is 1 after the blur, and the specular
         // twin's blending relies on it).
@@ -247,7 +202,11 @@ impl Pipelines {
                 write_mask: wgpu::ColorWrites::ALL,
             })],
         );
-        Self { forward_z, add }
+        Self {
+            forward_z,
+            forward_z_view,
+            add,
+        }
     }
 }
 
@@ -260,13 +219,19 @@ struct Shadows {
 }
 
 struct LayerCopy {
-    uniform: wgpu::Buffer,
+    /// A cascade's layer in Bevy's texture (a spot light's view needs none).
+    uniform: Option<wgpu::Buffer>,
     bind_group: wgpu::BindGroup,
     target: wgpu::TextureView,
 }
 
-/// Bevy's directional shadow texture, its size, the lights read from it.
-type ShadowKey = (bevy::render::render_resource::TextureId, u32, usize);
+/// Bevy's directional shadow texture, its size, the lights read from it (a spot light by its
+/// map's view).
+type ShadowKey = (
+    bevy::render::render_resource::TextureId,
+    u32,
+    Vec<Option<bevy::render::render_resource::TextureViewId>>,
+);
 
 /// One camera's transmittance state (for one main texture, as `render::ViewSss`).
 pub(crate) struct Transmit {
@@ -293,7 +258,7 @@ pub(crate) struct Transmit {
 pub(crate) struct Frame<'a> {
     pub camera: CameraUniform,
     pub clip_from_world: BevyMat4,
-    pub lights: &'a [DirectionalShadow],
+    pub lights: &'a [LightShadow],
     /// `ViewShadowBindings::directional_light_depth_texture`.
     pub bevy_shadows: &'a bevy::render::render_resource::Texture,
     pub depth: &'a wgpu::TextureView,
@@ -373,32 +338,48 @@ impl Transmit {
         encoder: &mut wgpu::CommandEncoder,
         frame: &Frame<'_>,
     ) {
-        let size = frame.bevy_shadows.width();
         let lights = &frame.lights[..frame.lights.len().min(MAX_LIGHTS)];
-        let key: ShadowKey = (frame.bevy_shadows.id(), size, lights.len());
-        let entry_layers: Vec<EntryLayer> = lights
+        // Every map in one array of ours, a light's faces in a row, as large as the largest
+        // (a smaller one fills its top-left corner).
+        let faces: Vec<(&LightShadow, &FaceMap)> = lights
             .iter()
-            .map(|l| EntryLayer {
-                view_proj: forward_z(l.clip_from_world),
-                kind: KIND_DIRECTIONAL,
+            .flat_map(|l| l.faces.iter().map(move |f| (l, f)))
+            .collect();
+        let size = faces.iter().map(|(_, f)| f.size).max().unwrap_or(1);
+        let views = faces
+            .iter()
+            .map(|(_, f)| match &f.source {
+                MapSource::Layer(_) => None,
+                MapSource::View(v) => Some(v.id()),
+            })
+            .collect();
+        let key: ShadowKey = (frame.bevy_shadows.id(), size, views);
+        let entry_layers: Vec<EntryLayer> = faces
+            .iter()
+            .map(|(l, f)| EntryLayer {
+                view_proj: forward_z(f.clip_from_world),
+                kind: l.kind,
                 origin: l.origin,
                 direction: l.direction,
-                size,
+                size: f.size,
             })
             .collect();
         if self.shadows.as_ref().is_none_or(|s| s.key != key) {
-            self.shadows = Some(self.bind_shadows(device, pipelines, frame, key, &entry_layers));
+            self.shadows =
+                Some(self.bind_shadows(device, pipelines, frame, key, &faces, &entry_layers));
         }
         let Some(shadows) = &mut self.shadows else {
             return;
         };
         shadows.entry.set_layers(queue, &entry_layers);
-        for (i, light) in lights.iter().enumerate() {
-            shadows.entry.set_region(i, Some(light.region));
+        for (i, (_, face)) in faces.iter().enumerate() {
+            shadows.entry.set_region(i, Some(face.region));
         }
-        for (copy, light) in shadows.copies.iter().zip(lights) {
-            let layer = [light.bevy_layer as i32, 0, 0, 0];
-            queue.write_buffer(&copy.uniform, 0, bytemuck::cast_slice(&layer));
+        for (copy, (_, face)) in shadows.copies.iter().zip(&faces) {
+            if let (Some(uniform), MapSource::Layer(layer)) = (&copy.uniform, &face.source) {
+                let layer = [*layer as i32, 0, 0, 0];
+                queue.write_buffer(uniform, 0, bytemuck::cast_slice(&layer));
+            }
         }
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&frame.camera));
         let uniform = lights_uniform(lights, &self.settings, frame.units_per_mm, size);
@@ -418,7 +399,7 @@ impl Transmit {
             }
         }
 
-        for (copy, light) in shadows.copies.iter().zip(lights) {
+        for (copy, (_, face)) in shadows.copies.iter().zip(&faces) {
             let mut pass = util::depth_pass(
                 encoder,
                 "subsurface forward z",
@@ -427,10 +408,13 @@ impl Transmit {
                 None,
             );
             // Outside the region the layer stays cleared: empty.
-            let [x, y, w, h] = light.region;
+            let [x, y, w, h] = face.region;
             if w > 0 && h > 0 {
                 pass.set_scissor_rect(x, y, w, h);
-                pass.set_pipeline(&pipelines.forward_z);
+                pass.set_pipeline(match face.source {
+                    MapSource::Layer(_) => &pipelines.forward_z,
+                    MapSource::View(_) => &pipelines.forward_z_view,
+                });
                 pass.set_bind_group(0, &copy.bind_group, &[]);
                 pass.draw(0..3, 0..1);
             }
@@ -477,15 +461,16 @@ impl Transmit {
         pipelines: &Pipelines,
         frame: &Frame<'_>,
         key: ShadowKey,
+        faces: &[(&LightShadow, &FaceMap)],
         entry_layers: &[EntryLayer],
     ) -> Shadows {
-        let (_, size, count) = key;
+        let (_, size, ref views) = key;
         let depth = util::texture_2d(
             device,
             "subsurface forward-z shadow maps",
             size,
             size,
-            count as u32,
+            views.len() as u32,
             wgpu::TextureFormat::Depth32Float,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
@@ -497,24 +482,38 @@ impl Transmit {
             aspect: wgpu::TextureAspect::DepthOnly,
             ..Default::default()
         });
-        let layout = pipelines.forward_z.get_bind_group_layout(0);
-        let copies = (0..count as u32)
-            .map(|i| {
-                let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("subsurface forward z layer"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let bind_group = util::bind_group(
-                    device,
-                    "subsurface forward z",
-                    &layout,
-                    [
-                        (0, wgpu::BindingResource::TextureView(&bevy_view)),
-                        (1, uniform.as_entire_binding()),
-                    ],
-                );
+        let copies = (0..views.len() as u32)
+            .zip(faces)
+            .map(|(i, (_, face))| {
+                let (uniform, bind_group) = match &face.source {
+                    MapSource::Layer(_) => {
+                        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("subsurface forward z layer"),
+                            size: 16,
+                            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                            mapped_at_creation: false,
+                        });
+                        let bind_group = util::bind_group(
+                            device,
+                            "subsurface forward z",
+                            &pipelines.forward_z.get_bind_group_layout(0),
+                            [
+                                (0, wgpu::BindingResource::TextureView(&bevy_view)),
+                                (1, uniform.as_entire_binding()),
+                            ],
+                        );
+                        (Some(uniform), bind_group)
+                    }
+                    MapSource::View(view) => {
+                        let bind_group = util::bind_group(
+                            device,
+                            "subsurface forward z (spot)",
+                            &pipelines.forward_z_view.get_bind_group_layout(0),
+                            [(2, wgpu::BindingResource::TextureView(view))],
+                        );
+                        (None, bind_group)
+                    }
+                };
                 LayerCopy {
                     uniform,
                     bind_group,
@@ -544,10 +543,10 @@ impl Transmit {
     }
 }
 
-/// subsurface-render's `LightsUniform` for these lights, light `i` reading layer `i` of our
-/// copy (`size` texels square).
+/// subsurface-render's `LightsUniform` for these lights, their faces in the layers of our
+/// copy in turn (`size` texels square; a smaller map in its top-left corner).
 fn lights_uniform(
-    lights: &[DirectionalShadow],
+    lights: &[LightShadow],
     settings: &RenderSettings,
     units_per_mm: f32,
     size: u32,
@@ -563,24 +562,29 @@ fn lights_uniform(
     u.map_downsample = 1;
     u.sss_runs = 1;
     u.bounce_cell_mm = settings.bounce.cell_mm;
+    let mut first_layer = 0;
     for (i, l) in lights.iter().enumerate() {
         let mut view_proj = [[[0.0; 4]; 4]; 6];
-        view_proj[0] = forward_z(l.clip_from_world).to_cols_array_2d();
+        for (m, face) in view_proj.iter_mut().zip(&l.faces) {
+            *m = forward_z(face.clip_from_world).to_cols_array_2d();
+        }
         u.lights[i] = LightUniform {
             position: l.origin.to_array(),
-            kind: KIND_DIRECTIONAL,
+            kind: l.kind,
             direction: l.direction.to_array(),
-            first_layer: i as f32,
+            first_layer: first_layer as f32,
             color: l.color,
             // Two texels along the light: the receiver's own depth, quantized and filtered
             // over 3x3 texels, must not shadow it.
             shadow_bias: 2.0 * l.texel_size,
-            cos_outer: -1.0,
-            cos_inner: -1.0 + 1e-4,
-            shadow_uv_scale: 1.0,
+            cos_outer: l.cone[0],
+            cos_inner: l.cone[1],
+            // A light's faces share one size (a point light's cube).
+            shadow_uv_scale: l.faces.first().map_or(1.0, |f| f.size as f32 / size as f32),
             atlas_texel: 1.0 / size as f32,
             view_proj,
         };
+        first_layer += l.faces.len();
     }
     u
 }
@@ -608,24 +612,5 @@ mod tests {
             assert!((ours.z / ours.w - (1.0 - bevy_d)).abs() < 1e-6, "{ours}");
             assert!((ours.x - 0.15).abs() < 1e-6 && (ours.y + 0.1).abs() < 1e-6);
         }
-    }
-
-    /// The texels a box covers: a cascade 4 units wide on 16 texels sees a 1-unit box at its
-    /// centre on texels 6..10, 5..11 with the neighbour each side; grown by a margin of 1
-    /// (3 units: texels 2..14), 1..15; a box beside the cascade covers none.
-    #[test]
-    fn region_covers_the_box_and_its_margin() {
-        let clip_from_world = BevyMat4::from_cols(
-            bevy::math::Vec4::new(0.5, 0.0, 0.0, 0.0),
-            bevy::math::Vec4::new(0.0, 0.5, 0.0, 0.0),
-            bevy::math::Vec4::new(0.0, 0.0, 0.25, 0.0),
-            bevy::math::Vec4::new(0.0, 0.0, 1.0, 1.0),
-        );
-        let unit = (BevyVec3::splat(-0.5), BevyVec3::new(0.5, 0.5, -1.0));
-        assert_eq!(region(clip_from_world, 16, unit, 0.0), [5, 5, 6, 6]);
-        assert_eq!(region(clip_from_world, 16, unit, 1.0), [1, 1, 14, 14]);
-        let beside = (BevyVec3::new(5.0, 0.0, -1.0), BevyVec3::new(6.0, 1.0, -0.5));
-        let [_, _, w, _] = region(clip_from_world, 16, beside, 0.0);
-        assert_eq!(w, 0);
     }
 }

@@ -7,27 +7,19 @@ mod common;
 use bevy::prelude::*;
 use common::*;
 
-fn luminance(p: [f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
-}
-
 #[test]
 fn headless_sphere_is_lit_and_shadowed() {
     if !gpu_available() {
         return;
     }
     let mut h = setup(app(), ());
-    let material = h
-        .app
-        .world_mut()
-        .resource_mut::<Assets<StandardMaterial>>()
-        .add(StandardMaterial {
-            base_color: Color::linear_rgb(0.8, 0.8, 0.8),
-            perceptual_roughness: 0.7,
-            ..default()
-        });
-    spawn_scene(&mut h.app, MeshMaterial3d(material));
-    let image = render_until_stable(&mut h, 600);
+    let grey = StandardMaterial {
+        base_color: Color::linear_rgb(0.8, 0.8, 0.8),
+        perceptual_roughness: 0.7,
+        ..default()
+    };
+    let material = add_asset(&mut h.app, grey);
+    let image = render_scene(&mut h, MeshMaterial3d(material));
 
     // Background: top-left corner is sky, the clear colour exactly (as f16).
     let bg = pixel(&image, 1, 1);

@@ -8,7 +8,7 @@ mod common;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use common::*;
-use subsurface_bevy::{Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
+use subsurface_bevy::{Subsurface, SubsurfacePlugin};
 
 fn render(with_subsurface: bool) -> Vec<u8> {
     render_skin(with_subsurface, 0.6, 20.0, "skin1")
@@ -43,31 +43,22 @@ fn render_camera(
         Some(sub) => setup_with(app, sub, tonemapping),
         None => setup_with(app, (), tonemapping),
     };
-    let skin = h
-        .app
-        .world_mut()
-        .resource_mut::<Assets<SkinMaterial>>()
-        .add(SkinMaterial {
-            base: StandardMaterial {
-                base_color: Color::linear_rgb(0.8, 0.5, 0.4),
-                perceptual_roughness: roughness,
-                ..default()
-            },
-            // The sphere has a radius of 1 m, 30 pixels here: a width of 20 makes a
-            // profile millimetre 2 cm, a fraction of a pixel, the profile a few pixels.
-            extension: Skin::new(medium, width),
-        });
-    spawn_scene(&mut h.app, MeshMaterial3d(skin));
-    render_until_stable(&mut h, 600)
+    let base = StandardMaterial {
+        base_color: Color::linear_rgb(0.8, 0.5, 0.4),
+        perceptual_roughness: roughness,
+        ..default()
+    };
+    // The sphere has a radius of 1 m, 30 pixels here: a width of 20 makes a profile
+    // millimetre 2 cm, a fraction of a pixel, the profile a few pixels.
+    let skin = add_skin(h.app.world_mut(), base, medium, width);
+    render_scene(&mut h, MeshMaterial3d(skin))
 }
 
 #[test]
 fn subsurface_changes_skin_and_nothing_else() {
-    if !gpu_available() {
+    let Some((off, on)) = off_and_on(render) else {
         return;
-    }
-    let off = render(false);
-    let on = render(true);
+    };
     // The blur alone, for its energy: transmittance (on by default) adds light that crosses
     // the sphere near its terminator.
     let blur_only = Subsurface {
@@ -128,21 +119,15 @@ fn subsurface_changes_skin_and_nothing_else() {
     assert!((0.9..1.05).contains(&ratio), "skin energy ratio {ratio}");
 }
 
-fn luminance(p: [f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
-}
-
 /// The skin's specular light is drawn after the blur (by the additive twin), so a sharp
 /// highlight keeps its peak while the diffuse light around it scatters. Blurring the
 /// highlight with the diffuse light would lower its peak (measured in docs/lab/bevy.md).
 #[test]
 fn specular_highlight_stays_sharp() {
-    if !gpu_available() {
-        return;
-    }
     // Glossy skin and a wide profile, so that the blur is several pixels wide.
-    let off = render_skin(false, 0.25, 100.0, "skin1");
-    let on = render_skin(true, 0.25, 100.0, "skin1");
+    let Some((off, on)) = off_and_on(|sub| render_skin(sub, 0.25, 100.0, "skin1")) else {
+        return;
+    };
     dump(&off, "specular_off");
     dump(&on, "specular_on");
 
@@ -197,11 +182,9 @@ fn specular_highlight_stays_sharp() {
 /// (its diffuse and its specular twin), no pixel is marked, and nothing is blurred.
 #[test]
 fn unknown_medium_draws_plain_pbr() {
-    if !gpu_available() {
+    let Some((off, on)) = off_and_on(|sub| render_skin(sub, 0.6, 1.0, "unobtainium")) else {
         return;
-    }
-    let off = render_skin(false, 0.6, 1.0, "unobtainium");
-    let on = render_skin(true, 0.6, 1.0, "unobtainium");
+    };
     let (x, y) = (WIDTH / 2, HEIGHT / 3); // on the sphere's lit upper half
     let p = pixel(&on, x, y);
     assert!(
@@ -222,11 +205,11 @@ fn unknown_medium_draws_plain_pbr() {
 /// the non-skin pixels must still come back bit for bit, and the skin must still change.
 #[test]
 fn works_when_tone_mapping_swaps_main_textures() {
-    if !gpu_available() {
+    let Some((off, on)) =
+        off_and_on(|sub| render_full(sub, 0.6, 20.0, "skin1", Tonemapping::Reinhard))
+    else {
         return;
-    }
-    let off = render_full(false, 0.6, 20.0, "skin1", Tonemapping::Reinhard);
-    let on = render_full(true, 0.6, 20.0, "skin1", Tonemapping::Reinhard);
+    };
     let (mut skin, mut changed) = (0, 0);
     for y in 0..HEIGHT {
         for x in 0..WIDTH {

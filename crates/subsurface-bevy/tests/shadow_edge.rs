@@ -41,21 +41,14 @@ fn render(with_subsurface: bool) -> Vec<u8> {
         MeshMaterial3d(grey),
         Transform::from_translation(Vec3::new(0.0, 0.5, 0.866) + 2.0 * to_light),
     ));
-    spawn_scene(&mut h.app, MeshMaterial3d(skin));
-    render_until_stable(&mut h, 600)
-}
-
-fn luminance(p: [f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+    render_scene(&mut h, MeshMaterial3d(skin))
 }
 
 #[test]
 fn red_light_scatters_furthest_into_a_shadow() {
-    if !gpu_available() {
+    let Some((off, on)) = off_and_on(render) else {
         return;
-    }
-    let off = render(false);
-    let on = render(true);
+    };
     dump(&off, "edge_off");
     dump(&on, "edge_on");
     let skin = |x: u32, y: u32| pixel(&off, x, y)[3] < 0.0;
@@ -92,12 +85,11 @@ fn red_light_scatters_furthest_into_a_shadow() {
         "{n} shadow-edge pixels, mean gain r {:.4} g {:.4} b {:.4}",
         gain[0], gain[1], gain[2]
     );
-    assert!(
-        gain[0] > 0.01,
-        "no light scattered into the shadow: {gain:?}"
-    );
-    assert!(
-        gain[0] > 1.1 * gain[1] && gain[1] > 1.1 * gain[2],
-        "red does not scatter furthest: {gain:?}"
+    assert_reddest(
+        gain,
+        0.01,
+        1.1,
+        "no light scattered into the shadow",
+        "red does not scatter furthest",
     );
 }

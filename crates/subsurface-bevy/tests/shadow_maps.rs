@@ -126,13 +126,8 @@ fn directional_cascades_are_reverse_z_layers_in_view_order() {
         return;
     }
     let mut h = setup(app(), ());
-    let m = h
-        .app
-        .world_mut()
-        .resource_mut::<Assets<StandardMaterial>>()
-        .add(StandardMaterial::default());
-    spawn_scene(&mut h.app, MeshMaterial3d(m));
-    render_until_stable(&mut h, 600);
+    let m = add_asset(&mut h.app, StandardMaterial::default());
+    render_scene(&mut h, MeshMaterial3d(m));
 
     let world = h.app.sub_app_mut(RenderApp).world_mut();
     let device = world.resource::<RenderDevice>().wgpu_device().clone();

@@ -1,5 +1,5 @@
-//! Transmittance from Bevy's directional shadow maps: a 3 mm skin slab lit from straight
-//! behind by a shadow-casting directional light, seen from its dark side 30 degrees off its
+//! Transmittance from Bevy's shadow maps: a 3 mm skin slab lit from straight behind by a
+//! shadow-casting directional, spot or point light, seen from its dark side 30 degrees off its
 //! normal (out of the unscattered lobe, which leaves along the light), beside a 10 cm skin
 //! ball lit the same way. With transmittance the slab's dark side gains light, reddest, as
 //! much as exact slab transport says 3 mm of skin passes; the ball's dark side, 10 cm
@@ -17,18 +17,54 @@ const SLAB: Vec3 = Vec3::new(-0.09, 0.0, 0.0);
 const BALL: Vec3 = Vec3::new(0.1, 0.0, 0.0);
 const BALL_RADIUS: f32 = 0.05;
 const ILLUMINANCE: f32 = 10_000.0;
+/// The spot light's and the point light's distance behind the scene's centre, metres.
+const SPOT_M: f32 = 3.0;
+const POINT_M: f32 = 2.0;
+
+/// The light behind the slab.
+#[derive(Clone, Copy)]
+enum Backlight {
+    Directional {
+        shadows: bool,
+    },
+    Spot,
+    Point,
+    /// The point light on Bevy's default cube size, beside a shadow-casting directional
+    /// light from the camera's side: the cube's faces follow the sun's cascade in our maps,
+    /// smaller than it.
+    PointAfterSun,
+}
+
+impl Backlight {
+    /// The irradiance at the slab's centre, as a share of `ILLUMINANCE`: 1 for the
+    /// directional light; for the others, whose intensity gives `ILLUMINANCE` at the scene's
+    /// centre, the inverse square and the cosine of the slab's offset.
+    fn share_at_slab(self) -> f32 {
+        let d = match self {
+            Backlight::Directional { .. } => return 1.0,
+            Backlight::Spot => SPOT_M,
+            Backlight::Point | Backlight::PointAfterSun => POINT_M,
+        };
+        let r2 = d * d + SLAB.length_squared();
+        d.powi(3) / r2.powf(1.5)
+    }
+}
 /// The camera's angle to the slab's normal.
 const VIEW_DEG: f32 = 30.0;
 
 /// `None`: no `Subsurface` on the camera (the skin keeps its marker, which tells the skin
 /// pixels); `Some(t)`: `Subsurface` with transmittance `t`.
 fn render(transmittance: Option<bool>) -> Vec<u8> {
-    render_with(transmittance, true, None)
+    render_with(
+        transmittance,
+        Backlight::Directional { shadows: true },
+        None,
+    )
 }
 
-/// As [`render`], the light casting shadows or not; with `first_eye`, the camera first
-/// renders a stable frame from there, then moves to its place.
-fn render_with(transmittance: Option<bool>, shadows: bool, first_eye: Option<Vec3>) -> Vec<u8> {
+/// As [`render`], with the light `light`; with `first_eye`, the camera first renders a
+/// stable frame from there, then moves to its place.
+fn render_with(transmittance: Option<bool>, light: Backlight, first_eye: Option<Vec3>) -> Vec<u8> {
     let mut app = app();
     app.add_plugins(SubsurfacePlugin);
     let mut h = match transmittance {
@@ -85,25 +121,73 @@ fn render_with(transmittance: Option<bool>, shadows: bool, first_eye: Option<Vec
         MeshMaterial3d(grey),
         Transform::from_xyz(0.0, 0.13, -0.05),
     ));
-    world.spawn((
-        DirectionalLight {
-            illuminance: ILLUMINANCE,
-            shadow_maps_enabled: shadows,
-            ..default()
-        },
-        // From straight behind the slab: along +z, toward the camera's side.
-        Transform::from_xyz(0.0, 0.0, -1.0).looking_at(Vec3::ZERO, Vec3::Y),
-        // One cascade over the close scene: its texels are 1.5 mm (the default's first
-        // cascade spans 10 m).
-        CascadeShadowConfigBuilder {
-            num_cascades: 1,
-            minimum_distance: 0.1,
-            maximum_distance: 1.5,
-            first_cascade_far_bound: 1.5,
-            overlap_proportion: 0.2,
+    // Spot and point lights: lumens whose candela give ILLUMINANCE lux at the scene's
+    // centre; a range far beyond the scene, so Bevy's fade near it does not dim them.
+    let lumens = |d: f32| ILLUMINANCE * 4.0 * std::f32::consts::PI * d * d;
+    // From straight behind the slab: along +z, toward the camera's side.
+    let behind = |d: f32| Transform::from_xyz(0.0, 0.0, -d).looking_at(Vec3::ZERO, Vec3::Y);
+    match light {
+        Backlight::Directional { shadows } => {
+            world.spawn((
+                DirectionalLight {
+                    illuminance: ILLUMINANCE,
+                    shadow_maps_enabled: shadows,
+                    ..default()
+                },
+                behind(1.0),
+                // One cascade over the close scene: its texels are 1.5 mm (the default's
+                // first cascade spans 10 m).
+                CascadeShadowConfigBuilder {
+                    num_cascades: 1,
+                    minimum_distance: 0.1,
+                    maximum_distance: 1.5,
+                    first_cascade_far_bound: 1.5,
+                    overlap_proportion: 0.2,
+                }
+                .build(),
+            ));
         }
-        .build(),
-    ));
+        // A narrow cone over the scene: 0.3 mm texels on the 2048² map at 3 m; the scene
+        // lies inside the inner angle.
+        Backlight::Spot => {
+            world.spawn((
+                SpotLight {
+                    intensity: lumens(SPOT_M),
+                    range: 100.0,
+                    inner_angle: 0.09,
+                    outer_angle: 0.1,
+                    shadow_maps_enabled: true,
+                    ..default()
+                },
+                behind(SPOT_M),
+            ));
+        }
+        // 2 mm texels on 2048² cube faces at 2 m.
+        Backlight::Point | Backlight::PointAfterSun => {
+            if let Backlight::PointAfterSun = light {
+                // It lights the side the camera sees: nothing of it crosses the slab.
+                world.spawn((
+                    DirectionalLight {
+                        illuminance: ILLUMINANCE,
+                        shadow_maps_enabled: true,
+                        ..default()
+                    },
+                    Transform::from_xyz(0.3, 0.2, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
+                ));
+            } else {
+                world.insert_resource(bevy::light::PointLightShadowMap { size: 2048 });
+            }
+            world.spawn((
+                PointLight {
+                    intensity: lumens(POINT_M),
+                    range: 100.0,
+                    shadow_maps_enabled: true,
+                    ..default()
+                },
+                behind(POINT_M),
+            ));
+        }
+    }
     if first_eye.is_some() {
         render_until_stable(&mut h, 600);
         h.app
@@ -154,14 +238,37 @@ fn mean_gain(on: &[u8], off: &[u8], pixels: &[(u32, u32)]) -> [f64; 3] {
 
 #[test]
 fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
-    if !gpu_available() {
+    thin_slab_transmits(Backlight::Directional { shadows: true }, "directional");
+}
+
+/// The same through a spot light's map, which Bevy keeps after every camera's cascades.
+#[test]
+fn a_spot_light_transmits_through_thin_skin() {
+    thin_slab_transmits(Backlight::Spot, "spot");
+}
+
+/// The same through a point light's cube map (the face toward the scene is Bevy's +Z,
+/// subsurface-render's face 4).
+#[test]
+fn a_point_light_transmits_through_thin_skin() {
+    thin_slab_transmits(Backlight::Point, "point");
+}
+
+/// The same with a directional light's cascade in the layer before the cube's faces, the
+/// cube smaller than the cascade (Bevy's default sizes): a layer or a size mixed up between
+/// the two reads no light.
+#[test]
+fn a_point_light_after_a_sun_transmits_through_thin_skin() {
+    thin_slab_transmits(Backlight::PointAfterSun, "point after sun");
+}
+
+fn thin_slab_transmits(light: Backlight, name: &str) {
+    let Some((off, on)) = off_and_on(|t| render_with(Some(t), light, None)) else {
         return;
-    }
-    let marked = render(None);
-    let off = render(Some(false));
-    let on = render(Some(true));
-    dump(&off, "transmit_off");
-    dump(&on, "transmit_on");
+    };
+    let marked = render_with(None, light, None);
+    dump(&off, &format!("transmit_{name}_off"));
+    dump(&on, &format!("transmit_{name}_on"));
     let skin = |x: u32, y: u32| pixel(&marked, x, y)[3] < 0.0;
     // Skin pixels 4 pixels or more from anything else: the blur's footprint and the
     // rebuilt normal stay on one surface.
@@ -213,7 +320,7 @@ fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
         .sum::<f64>()
         / slab.len() as f64;
     eprintln!(
-        "slab: {} pixels, red without transmittance {dark:.5}, gain r {:.4} g {:.4} b {:.4}; \
+        "{name}: slab: {} pixels, red without transmittance {dark:.5}, gain r {:.4} g {:.4} b {:.4}; \
          ball: {} pixels, gain r {:.6} g {:.6} b {:.6}",
         slab.len(),
         slab_gain[0],
@@ -224,13 +331,12 @@ fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
         ball_gain[1],
         ball_gain[2]
     );
-    assert!(
-        slab_gain[0] > 0.05,
-        "the backlit slab gained no light: {slab_gain:?}"
-    );
-    assert!(
-        slab_gain[0] > 1.2 * slab_gain[1] && slab_gain[1] > 1.2 * slab_gain[2],
-        "the transmitted light is not reddest: {slab_gain:?}"
+    assert_reddest(
+        slab_gain,
+        0.05,
+        1.2,
+        "the backlit slab gained no light",
+        "the transmitted light is not reddest",
     );
     assert!(
         ball_gain.iter().all(|g| g.abs() < 0.01 * slab_gain[0]),
@@ -242,11 +348,11 @@ fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
     // asin(sin 30 / 1.3) inside and leaves at cosine cos 30. The irradiance in Bevy's units
     // is illuminance x exposure / pi (Bevy's Lambert lobe), the albedo 1.
     let exposure = bevy::camera::Exposure::default().exposure();
-    let e = ILLUMINANCE * exposure / std::f32::consts::PI;
+    let e = ILLUMINANCE * light.share_at_slab() * exposure / std::f32::consts::PI;
     let a = VIEW_DEG.to_radians();
     let inside = (1.0 - (a.sin() / 1.3).powi(2)).sqrt();
     let want = skin1_transport_t(THICKNESS_MM, inside, a.cos()).map(|t| t * e);
-    eprintln!("exact slab transport x E: {want:?}");
+    eprintln!("{name}: exact slab transport x E: {want:?}");
     for c in 0..3 {
         let got = slab_gain[c] as f32;
         assert!(
@@ -257,16 +363,15 @@ fn thin_backlit_skin_transmits_red_light_and_thick_skin_none() {
     }
 }
 
-/// Without a shadow-casting directional light there is no thickness to read: the step skips
+/// Without a shadow-casting light there is no thickness to read: the step skips
 /// transmittance quietly, and the frame is the one without it, bit for bit.
 #[test]
 fn no_shadow_casting_light_no_transmittance() {
-    if !gpu_available() {
+    let unshadowed = Backlight::Directional { shadows: false };
+    let Some((off, on)) = off_and_on(|t| render_with(Some(t), unshadowed, None)) else {
         return;
-    }
-    let off = render_with(Some(false), false, None);
-    let on = render_with(Some(true), false, None);
-    let marked = render_with(None, false, None);
+    };
+    let marked = render_with(None, unshadowed, None);
     let skin = (0..HEIGHT)
         .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
         .filter(|&(x, y)| pixel(&marked, x, y)[3] < 0.0)
@@ -287,7 +392,11 @@ fn a_moved_camera_transmits_as_a_fresh_one() {
         return;
     }
     let fresh = render(Some(true));
-    let moved = render_with(Some(true), true, Some(Vec3::new(-0.2, 0.15, 0.6)));
+    let moved = render_with(
+        Some(true),
+        Backlight::Directional { shadows: true },
+        Some(Vec3::new(-0.2, 0.15, 0.6)),
+    );
     let off = render(Some(false));
     assert!(fresh != off, "no transmitted light in the frame");
     let differ = fresh

@@ -6,7 +6,7 @@ mod common;
 
 use bevy::prelude::*;
 use common::*;
-use subsurface_bevy::{Skin, SkinMaterial, Subsurface, SubsurfacePlugin};
+use subsurface_bevy::{Subsurface, SubsurfacePlugin};
 
 /// The second camera: from the right, a narrower field of view, twice the skin scale.
 fn second() -> (Transform, impl Bundle) {
@@ -26,17 +26,11 @@ fn second() -> (Transform, impl Bundle) {
 }
 
 fn skin_scene(h: &mut Headless) {
-    let skin = h
-        .app
-        .world_mut()
-        .resource_mut::<Assets<SkinMaterial>>()
-        .add(SkinMaterial {
-            base: StandardMaterial {
-                base_color: Color::linear_rgb(0.8, 0.5, 0.4),
-                ..default()
-            },
-            extension: Skin::new("skin1", 40.0),
-        });
+    let base = StandardMaterial {
+        base_color: Color::linear_rgb(0.8, 0.5, 0.4),
+        ..default()
+    };
+    let skin = add_skin(h.app.world_mut(), base, "skin1", 40.0);
     spawn_scene(&mut h.app, MeshMaterial3d(skin));
 }
 

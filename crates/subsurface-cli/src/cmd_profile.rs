@@ -22,33 +22,67 @@ the others follow in increasing offset. Channels sum to 1. The shader scales off
 on-screen size of a millimetre."
 )]
 pub struct KernelArgs {
+    #[command(flatten)]
+    params: KernelParamArgs,
+
+    /// Build the kernel from this material's Gaussian fit (all of its terms, per-channel weights)
+    /// instead of the skin profile of Separable SSS. See `subsurface profile --help` for names.
+    #[arg(long, value_name = "NAME")]
+    material: Option<String>,
+
+    /// Gaussians to fit to --material (1 to 12).
+    #[arg(long, value_name = "K", default_value_t = 6, requires = "material")]
+    gaussians: usize,
+
+    /// Print the kernel as JSON, [[r, g, b, offset_mm], ...], instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The flags that make the kernel's [`KernelParams`].
+#[derive(Debug, Clone, clap::Args)]
+struct KernelParamArgs {
     /// Number of taps: odd, from 3 to 63. Offsets reach 2 mm up to 19 taps and 3 mm above.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_SAMPLES)]
-    pub samples: u32,
+    samples: u32,
 
     /// Per-channel share of light that is scattered, each in 0..=1, as "R,G,B" or one value
     /// for all channels. 0 keeps the pixel sharp. [default: 0.48,0.41,0.28, or 1,1,1 with --material]
     #[arg(long, value_name = "R,G,B")]
-    pub kernel_strength: Option<String>,
+    kernel_strength: Option<String>,
 
     /// Per-channel width factor, each >= 0, as "R,G,B" or one value: the profile radius is
     /// divided by 0.001 + falloff, so smaller values blur that channel less.
     /// [default: 1.0,0.37,0.3, or 1,1,1 with --material]
     #[arg(long, value_name = "R,G,B")]
-    pub falloff: Option<String>,
+    falloff: Option<String>,
+}
 
-    /// Build the kernel from this material's Gaussian fit (all of its terms, per-channel weights)
-    /// instead of the skin profile of Separable SSS. See `subsurface profile --help` for names.
-    #[arg(long, value_name = "NAME")]
-    pub material: Option<String>,
-
-    /// Gaussians to fit to --material (1 to 12).
-    #[arg(long, value_name = "K", default_value_t = 6, requires = "material")]
-    pub gaussians: usize,
-
-    /// Print the kernel as JSON, [[r, g, b, offset_mm], ...], instead of a table.
-    #[arg(long)]
-    pub json: bool,
+impl KernelParamArgs {
+    /// The parameters, checked. A material's fit carries its own colour, so `for_material`
+    /// defaults strength and falloff to 1 where the skin kernel has its own.
+    fn params(&self, for_material: bool) -> Result<KernelParams> {
+        let (strength0, falloff0) = if for_material {
+            ([1.0; 3], [1.0; 3])
+        } else {
+            (DEFAULT_STRENGTH, DEFAULT_FALLOFF)
+        };
+        let strength = match &self.kernel_strength {
+            Some(s) => parse_rgb("kernel-strength", s)?,
+            None => strength0,
+        };
+        let falloff = match &self.falloff {
+            Some(s) => parse_rgb("falloff", s)?,
+            None => falloff0,
+        };
+        let params = KernelParams {
+            samples: self.samples,
+            strength,
+            falloff,
+        };
+        params.validate().map_err(flag_error)?;
+        Ok(params)
+    }
 }
 
 /// Show a material's diffusion profile R(r), its sum-of-Gaussians fit and the transmittance T(s).
@@ -61,25 +95,25 @@ chicken1, chicken2, cream, ketchup, marble, potato, skimmilk, skin1, skin2, whol
 pub struct ProfileArgs {
     /// Material preset; case, spaces, '-' and '_' are ignored ("whole milk").
     #[arg(long, value_name = "NAME", default_value = "skin")]
-    pub material: String,
+    material: String,
 
     /// Number of Gaussians to fit (1 to 12).
     #[arg(long, value_name = "K", default_value_t = 6)]
-    pub gaussians: usize,
+    gaussians: usize,
 
     /// Treat the material as a slab this thick (mm), using the multipole of Donner and Jensen
     /// 2005 instead of the semi-infinite dipole. Not available for "skin".
     #[arg(long, value_name = "MM")]
-    pub thickness: Option<f64>,
+    thickness: Option<f64>,
 
     /// Also draw R(r) (log scale) with its fit and T(s), per channel, into this PNG file;
     /// `-` writes it to standard output and the text to standard error.
     #[arg(long, value_name = "FILE.png")]
-    pub plot: Option<PathBuf>,
+    plot: Option<PathBuf>,
 
     /// Print the fit as JSON instead of text.
     #[arg(long)]
-    pub json: bool,
+    json: bool,
 }
 
 /// Prefixes a library error, whose message starts with the field name, with `--`.
@@ -129,24 +163,7 @@ fn fit_material(m: &Material, k: usize) -> Result<GaussianFit> {
 
 /// Builds the kernel `args` ask for.
 pub fn build_kernel(args: &KernelArgs) -> Result<Vec<[f32; 4]>> {
-    let (strength0, falloff0) = match args.material {
-        None => (DEFAULT_STRENGTH, DEFAULT_FALLOFF),
-        Some(_) => ([1.0; 3], [1.0; 3]),
-    };
-    let strength = match &args.kernel_strength {
-        Some(s) => parse_rgb("kernel-strength", s)?,
-        None => strength0,
-    };
-    let falloff = match &args.falloff {
-        Some(s) => parse_rgb("falloff", s)?,
-        None => falloff0,
-    };
-    let params = KernelParams {
-        samples: args.samples,
-        strength,
-        falloff,
-    };
-    params.validate().map_err(flag_error)?;
+    let params = args.params.params(args.material.is_some())?;
     match &args.material {
         None => separable_kernel(&params).map_err(flag_error),
         Some(name) => {
@@ -154,10 +171,10 @@ pub fn build_kernel(args: &KernelArgs) -> Result<Vec<[f32; 4]>> {
             let fit = fit_material(&material, args.gaussians)?;
             // As the renderer builds it: measured materials take the profile's projection.
             if matches!(material, Material::Gaussians { .. }) {
-                let range = separable_range_for(&fit.profile, args.samples);
+                let range = separable_range_for(&fit.profile, params.samples);
                 separable_kernel_for(&fit.profile, &params, range).map_err(flag_error)
             } else {
-                let range = separable_range_projected(&fit.profile, args.samples);
+                let range = separable_range_projected(&fit.profile, params.samples);
                 separable_kernel_projected(&fit.profile, &params, range).map_err(flag_error)
             }
         }
@@ -428,9 +445,11 @@ mod tests {
 
     fn kernel_args(samples: u32) -> KernelArgs {
         KernelArgs {
-            samples,
-            kernel_strength: None,
-            falloff: None,
+            params: KernelParamArgs {
+                samples,
+                kernel_strength: None,
+                falloff: None,
+            },
             material: None,
             gaussians: 6,
             json: true,
@@ -450,25 +469,25 @@ mod tests {
     #[test]
     fn kernel_flags_are_parsed_and_checked() {
         let mut a = kernel_args(9);
-        a.kernel_strength = Some("1, 1,1".into());
-        a.falloff = Some("0.5".into());
+        a.params.kernel_strength = Some("1, 1,1".into());
+        a.params.falloff = Some("0.5".into());
         let k = build_kernel(&a).unwrap();
         let s: f32 = k.iter().map(|t| t[1]).sum();
         assert!((s - 1.0).abs() < 1e-5);
 
         let e = build_kernel(&kernel_args(4)).unwrap_err().to_string();
         assert_eq!(e, "--samples: must be odd and in 3..=63 (got 4)");
-        a.kernel_strength = Some("1,2".into());
+        a.params.kernel_strength = Some("1,2".into());
         let e = build_kernel(&a).unwrap_err().to_string();
         assert!(e.starts_with("--kernel-strength: expected R,G,B"), "{e}");
-        a.kernel_strength = Some("0.5,1.5,0.5".into());
+        a.params.kernel_strength = Some("0.5,1.5,0.5".into());
         let e = build_kernel(&a).unwrap_err().to_string();
         assert!(
             e.starts_with("--kernel-strength.g: must be in 0..=1"),
             "{e}"
         );
-        a.kernel_strength = None;
-        a.falloff = Some("nan,1,1".into());
+        a.params.kernel_strength = None;
+        a.params.falloff = Some("nan,1,1".into());
         assert!(
             build_kernel(&a)
                 .unwrap_err()

@@ -37,23 +37,23 @@ use subsurface_render::scene::{LightKind, Object};
 #[derive(Args, Debug)]
 pub struct ExportArgs {
     /// Scene file (TOML). Without it, the embedded default scene.
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Output directory: scene.xml and meshes/*.ply are written there (created if missing).
     #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    out: PathBuf,
     /// Image width in pixels (default: the scene's). Overridable at load time (`width`).
     #[arg(long)]
-    pub width: Option<u32>,
+    width: Option<u32>,
     /// Image height in pixels (default: the scene's). Overridable at load time (`height`).
     #[arg(long)]
-    pub height: Option<u32>,
+    height: Option<u32>,
     /// Default samples per pixel written into the scene (`spp` parameter).
     #[arg(long, default_value_t = 128)]
-    pub spp: u32,
+    spp: u32,
     /// Default maximum path depth (`max_depth` parameter). Skin's single-scattering albedo is
     /// up to 0.96, so light needs a hundred or more scattering events to cross a finger.
     #[arg(long, default_value_t = 256)]
-    pub max_depth: u32,
+    max_depth: u32,
 }
 
 /// The homogeneous medium a material's `medium` stands for, and whether it was substituted:

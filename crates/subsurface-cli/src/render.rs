@@ -14,23 +14,23 @@ use crate::settings_args::{SettingsArgs, load_scene, replicate};
 pub struct RenderArgs {
     /// Scene file (TOML, see docs/guide.md). Without it, the embedded default scene: a backlit hand
     /// beside a wedge.
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model (in metres, skin material); the
     /// camera is re-aimed to frame it.
     #[arg(long, value_name = "FILE.glb")]
-    pub model: Option<PathBuf>,
+    model: Option<PathBuf>,
     /// Output PNG.
     #[arg(long, short, default_value = "subsurface.png", value_name = "FILE.png")]
-    pub out: PathBuf,
+    out: PathBuf,
     /// Render this many copies of the scene's objects in a grid covering about the same
     /// screen area (the scalability scenes of `bench --characters`).
     #[arg(long, default_value_t = 1, value_name = "N")]
-    pub characters: u32,
+    characters: u32,
     /// What to write: the final image or an intermediate buffer.
     #[arg(long, value_enum, default_value = "final")]
-    pub view: ViewArg,
+    view: ViewArg,
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    settings: SettingsArgs,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]

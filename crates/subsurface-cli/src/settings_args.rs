@@ -18,7 +18,7 @@ pub struct SettingsArgs {
     /// below override it. `subsurface settings --quality Q` lists what it sets
     /// [default: the scene's render.quality, medium].
     #[arg(long, value_name = "PRESET")]
-    pub quality: Option<Quality>,
+    quality: Option<Quality>,
     /// Image width in pixels [default: the scene's render.width, 1280].
     #[arg(long)]
     pub width: Option<u32>,
@@ -27,7 +27,7 @@ pub struct SettingsArgs {
     pub height: Option<u32>,
     /// Exposure in stops, in place of the scene's render.exposure_ev [default: 0].
     #[arg(long, value_name = "EV", allow_negative_numbers = true)]
-    pub exposure_ev: Option<f32>,
+    exposure_ev: Option<f32>,
     /// Subsurface-scattering method: gaussian6 = Jimenez et al. 2009 / GPU Pro (the profile's
     /// Gaussians, H+V 7-tap blurs each), separable = Jimenez et al. 2015 (one H and one V
     /// pass), hable13 = Hable et al. 2009 (one 2-D pass of 13 taps), texture = d'Eon et al.
@@ -35,45 +35,35 @@ pub struct SettingsArgs {
     /// Each material scatters with its own profile [default: the scene's render.sss.method,
     /// separable].
     #[arg(long, value_name = "METHOD")]
-    pub sss: Option<SssMethod>,
+    sss: Option<SssMethod>,
     /// Separable: number of kernel taps, odd, 3..=63 [default: render.sss.samples, 17].
     #[arg(long, value_name = "N")]
-    pub samples: Option<u32>,
+    samples: Option<u32>,
     /// Separable: jitter the taps per pixel, Jimenez et al. 2015's few-sample mode (e.g.
     /// --samples 7 --jitter): fixed taps' banding becomes fine noise (render.sss.jitter = true)
     /// [default: render.sss.jitter, false].
     #[arg(long)]
-    pub jitter: bool,
+    jitter: bool,
     /// Screen space: how a tap fetches its texels, packed (a pack step first, then one
     /// Rgba32Uint texel per texel), workgroup (packed, with separable's passes as compute
     /// shaders that read each line once into workgroup memory) or direct (colour, depth and
     /// SSS textures per texel); the same image at a different cost [default: render.sss.fetch,
     /// workgroup].
     #[arg(long, value_name = "FETCH")]
-    pub sss_fetch: Option<SssFetch>,
+    sss_fetch: Option<SssFetch>,
     /// Let the blur cross depth edges (render.sss.follow_surface = false).
     #[arg(long)]
-    pub no_follow_surface: bool,
+    no_follow_surface: bool,
     /// Six Gaussians: which of the five blurred Gaussians to accumulate, five 0/1 values (e.g.
     /// 1,1,0,1,1) [default: render.sss.gaussians, all].
     #[arg(long, value_name = "G1,..,G5", value_parser = parse_gaussians)]
-    pub gaussians: Option<[bool; 5]>,
+    gaussians: Option<[bool; 5]>,
     /// Texture space: size of each object's irradiance map in texels, 16..=16384 [default:
     /// render.sss.texture_size, 1024].
     #[arg(long, value_name = "N")]
-    pub texture_size: Option<u32>,
-    /// Multiplier on the physical size of every scattering material's profile (each
-    /// material's sss_width) [default: the materials' own, 1].
-    #[arg(long, value_name = "FACTOR")]
-    pub sss_width: Option<f32>,
-    /// Separable: per-channel share of scattered light R,G,B in 0..=1 for every scattering
-    /// material (kernel_strength) [default: the material's; skin 0.48,0.41,0.28].
-    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
-    pub kernel_strength: Option<[f32; 3]>,
-    /// Separable: per-channel falloff R,G,B in 0..=1 for every scattering material
-    /// [default: the material's; skin 1,0.37,0.3].
-    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
-    pub falloff: Option<[f32; 3]>,
+    texture_size: Option<u32>,
+    #[command(flatten)]
+    materials: MaterialArgs,
     /// Transmittance method: paper = Jimenez et al. 2010 (T(s) of the material's profile from
     /// standard shadow maps), beer = Green's exp(-sigma_t s), seed-report = the ad-hoc s^-0.6
     /// term of the screen/texture-space report, tsm = translucent shadow maps (d'Eon: back-side
@@ -82,17 +72,17 @@ pub struct SettingsArgs {
     /// entry surface, plus unscattered and once-scattered light; docs/lab/fidelity.md), off = none
     /// [default: render.transmittance.method, diffusion].
     #[arg(long, value_name = "METHOD")]
-    pub transmittance: Option<TransmittanceMethod>,
+    transmittance: Option<TransmittanceMethod>,
     /// Width in texels (odd, 1..=15) of the shadow-map area averaged for a softer thickness
     /// [default: render.transmittance.thickness_filter, 3].
     #[arg(long, value_name = "N")]
-    pub thickness_filter: Option<u32>,
+    thickness_filter: Option<u32>,
     /// Diffusion: shadow-map taps (0..=32) gathering the light that enters the lit surface
     /// around the light's chord and reaches the point through the medium, as behind a palm
     /// beside the finger roots; 0 = the chord's slab alone
     /// [default: render.transmittance.lateral_taps, 12].
     #[arg(long, value_name = "N")]
-    pub lateral_taps: Option<u32>,
+    lateral_taps: Option<u32>,
     /// Diffusion: evaluate it (the lateral taps included) for every light on a
     /// reduced-resolution map whose texels lie about MM profile millimetres apart on the
     /// nearest skin (0..=50; the reduction follows the skin's size on screen, 2x2 to 8x8 pixels
@@ -101,32 +91,49 @@ pub struct SettingsArgs {
     /// texels would span more than 4 MM runs everything at each pixel; 0 = at every pixel
     /// [default: render.transmitted_map.texel_mm, 4].
     #[arg(long, value_name = "MM", alias = "lateral-texel-mm")]
-    pub map_texel_mm: Option<f32>,
+    map_texel_mm: Option<f32>,
     /// Diffusion: how the transmitted map is evaluated, compute (its raster pass records each
     /// texel's surface, then a compute shader per object evaluates it; adapters without
     /// storage textures fall back to fragment) or fragment (in the raster pass's fragment
     /// shader); the same map at a different cost [default: render.transmitted_map.pass,
     /// compute].
     #[arg(long, value_name = "PASS", alias = "lateral-pass")]
-    pub map_pass: Option<MapEvaluation>,
+    map_pass: Option<MapEvaluation>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units
     /// [default: render.transmittance.normal_shrink, 0.005].
     #[arg(long, value_name = "UNITS")]
-    pub normal_shrink: Option<f32>,
+    normal_shrink: Option<f32>,
     /// The light lit parts send each other across the air, gathered from a flux pyramid of
     /// the shadow maps: each level is read from N to 2N of its cells away from the point
     /// (0..=8, about 9.4 N^2 reads a level); 0 = off [default: render.bounce.ring, 2].
     #[arg(long, value_name = "N")]
-    pub bounce_ring: Option<u32>,
+    bounce_ring: Option<u32>,
     /// Width of the finest flux-pyramid cells the bounce reads, profile millimetres
     /// (0.1..=50) [default: render.bounce.cell_mm, 2].
     #[arg(long, value_name = "MM")]
-    pub bounce_cell_mm: Option<f32>,
+    bounce_cell_mm: Option<f32>,
     /// Any setting of the scene's [render] table by its key, after the flags above, e.g.
     /// --set render.sss.samples=9 --set transmittance.method=paper (values in TOML syntax; a
     /// bare word is a string). `subsurface settings` lists every key with its default.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
-    pub set: Vec<(String, String)>,
+    set: Vec<(String, String)>,
+}
+
+/// The flags that change every scattering material rather than a `[render]` key.
+#[derive(Args, Debug, Clone, Default)]
+struct MaterialArgs {
+    /// Multiplier on the physical size of every scattering material's profile (each
+    /// material's sss_width) [default: the materials' own, 1].
+    #[arg(long, value_name = "FACTOR")]
+    sss_width: Option<f32>,
+    /// Separable: per-channel share of scattered light R,G,B in 0..=1 for every scattering
+    /// material (kernel_strength) [default: the material's; skin 0.48,0.41,0.28].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    kernel_strength: Option<[f32; 3]>,
+    /// Separable: per-channel falloff R,G,B in 0..=1 for every scattering material
+    /// [default: the material's; skin 1,0.37,0.3].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    falloff: Option<[f32; 3]>,
 }
 
 /// Sets one `[render]` key of `scene`; the quality preset keeps the scene file's own keys
@@ -171,6 +178,15 @@ fn flag_of(field: &str) -> String {
     format!("--{}", leaf.replace('_', "-"))
 }
 
+/// Writes each flag that is given into its field: `set! { flag => field, .. }`.
+macro_rules! set {
+    ($($flag:expr => $field:expr),* $(,)?) => {
+        $(if let Some(v) = $flag {
+            $field = v;
+        })*
+    };
+}
+
 impl SettingsArgs {
     /// Writes the flags into the scene's settings and materials and checks the result; an
     /// error names the flag.
@@ -182,29 +198,24 @@ impl SettingsArgs {
                 .map_err(|e| anyhow::anyhow!("--quality: {e}"))?;
         }
         let r = &mut scene.desc.render;
-        macro_rules! set {
-            ($flag:expr, $field:expr) => {
-                if let Some(v) = $flag {
-                    $field = v;
-                }
-            };
+        set! {
+            self.width => r.width,
+            self.height => r.height,
+            self.exposure_ev => r.exposure_ev,
+            self.sss => r.sss.method,
+            self.samples => r.sss.samples,
+            self.sss_fetch => r.sss.fetch,
+            self.gaussians => r.sss.gaussians,
+            self.texture_size => r.sss.texture_size,
+            self.transmittance => r.transmittance.method,
+            self.thickness_filter => r.transmittance.thickness_filter,
+            self.lateral_taps => r.transmittance.lateral_taps,
+            self.map_texel_mm => r.transmitted_map.texel_mm,
+            self.map_pass => r.transmitted_map.pass,
+            self.normal_shrink => r.transmittance.normal_shrink,
+            self.bounce_ring => r.bounce.ring,
+            self.bounce_cell_mm => r.bounce.cell_mm,
         }
-        set!(self.width, r.width);
-        set!(self.height, r.height);
-        set!(self.exposure_ev, r.exposure_ev);
-        set!(self.sss, r.sss.method);
-        set!(self.samples, r.sss.samples);
-        set!(self.sss_fetch, r.sss.fetch);
-        set!(self.gaussians, r.sss.gaussians);
-        set!(self.texture_size, r.sss.texture_size);
-        set!(self.transmittance, r.transmittance.method);
-        set!(self.thickness_filter, r.transmittance.thickness_filter);
-        set!(self.lateral_taps, r.transmittance.lateral_taps);
-        set!(self.map_texel_mm, r.transmitted_map.texel_mm);
-        set!(self.map_pass, r.transmitted_map.pass);
-        set!(self.normal_shrink, r.transmittance.normal_shrink);
-        set!(self.bounce_ring, r.bounce.ring);
-        set!(self.bounce_cell_mm, r.bounce.cell_mm);
         if self.jitter {
             r.sss.jitter = true;
         }
@@ -217,6 +228,13 @@ impl SettingsArgs {
         for (key, value) in &self.set {
             set_key(scene, key, value).map_err(|e| anyhow::anyhow!("--set {e}"))?;
         }
+        self.materials.apply(scene)
+    }
+}
+
+impl MaterialArgs {
+    /// Checks the flags and writes them into every scattering material.
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
         if let Some(w) = self.sss_width {
             anyhow::ensure!(
                 w.is_finite() && w > 0.0,
@@ -286,10 +304,10 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
 #[derive(Args, Debug)]
 pub struct SettingsListArgs {
     /// Scene file whose values to show (default: the embedded default scene).
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Show the values with this quality preset (the scene file's own keys kept).
     #[arg(long, value_name = "PRESET")]
-    pub quality: Option<Quality>,
+    quality: Option<Quality>,
 }
 
 /// `subsurface settings`: one line per key of `[render]`.
@@ -402,8 +420,11 @@ mod tests {
             sss_fetch: Some(SssFetch::Direct),
             map_pass: Some(MapEvaluation::Fragment),
             sss: Some(SssMethod::Hable13),
-            sss_width: Some(2.0),
-            kernel_strength: Some([1.0, 0.5, 0.25]),
+            materials: MaterialArgs {
+                sss_width: Some(2.0),
+                kernel_strength: Some([1.0, 0.5, 0.25]),
+                ..Default::default()
+            },
             ..Default::default()
         };
         args.apply(&mut scene).unwrap();

@@ -128,6 +128,24 @@ impl SumOfGaussians {
         out
     }
 
+    /// Each term's 1-D projection, `G1(v, x) = sqrt(2 pi v) G(v, x)`, as a term of weight
+    /// `w sqrt(2 pi v)`: what a line of the profile integrates to across it, so that
+    /// [`Self::eval`] gives the profile's response across a straight edge.
+    pub fn projected(&self) -> Self {
+        let terms = self
+            .terms
+            .iter()
+            .map(|t| {
+                let k = (2.0 * std::f64::consts::PI * t.variance).sqrt();
+                GaussianTerm {
+                    variance: t.variance,
+                    weight: t.weight.map(|w| w * k),
+                }
+            })
+            .collect();
+        Self { terms }
+    }
+
     /// The same profile with each channel's weights scaled to sum to 1.
     pub fn normalized(&self) -> Result<Self> {
         let total = self.total_weight();

@@ -159,31 +159,6 @@ pub fn separable_kernel_for(
     params: &KernelParams,
     range_mm: f64,
 ) -> Result<Vec<[f32; 4]>> {
-    separable_kernel_shaped(profile, params, range_mm, false)
-}
-
-/// [`separable_kernel_for`] with each Gaussian's 1-D projection, `G1(v, x) = sqrt(2 pi v)
-/// G(v, x)`, in place of the radial profile sampled along a line: the kernel a separable
-/// pass needs for the right response to a straight edge (the knife-edge measurement,
-/// docs/lab/fidelity.md). Blurring along x then y with it, every edge's profile across it is
-/// exactly the 2-D profile's, because the pass along the edge integrates to 1. The radial
-/// sampling of SeparableSSS.h (`separable_kernel_for`) weighs each term by `1 / sqrt(v)` on
-/// top, which for skin's tabulated kernel is part of the paper's look but for a measured
-/// material's heavy red tail halved the edge width against the path tracer.
-pub fn separable_kernel_projected(
-    profile: &SumOfGaussians,
-    params: &KernelParams,
-    range_mm: f64,
-) -> Result<Vec<[f32; 4]>> {
-    separable_kernel_shaped(profile, params, range_mm, true)
-}
-
-fn separable_kernel_shaped(
-    profile: &SumOfGaussians,
-    params: &KernelParams,
-    range_mm: f64,
-    projected: bool,
-) -> Result<Vec<[f32; 4]>> {
     params.validate()?;
     positive("range_mm", range_mm)?;
     let n = params.samples as usize;
@@ -216,15 +191,7 @@ fn separable_kernel_shaped(
                 let p: f64 = profile
                     .terms()
                     .iter()
-                    .map(|t| {
-                        let g = gaussian(t.variance, r);
-                        let k = if projected {
-                            (2.0 * std::f64::consts::PI * t.variance).sqrt()
-                        } else {
-                            1.0
-                        };
-                        t.weight[c] * k * g
-                    })
+                    .map(|t| t.weight[c] * gaussian(t.variance, r))
                     .sum();
                 tap[c] = area * p;
             }
@@ -259,6 +226,22 @@ fn separable_kernel_shaped(
         .into_iter()
         .map(|t| [t[0] as f32, t[1] as f32, t[2] as f32, t[3] as f32])
         .collect())
+}
+
+/// [`separable_kernel_for`] with each Gaussian's 1-D projection, `G1(v, x) = sqrt(2 pi v)
+/// G(v, x)`, in place of the radial profile sampled along a line: the kernel a separable
+/// pass needs for the right response to a straight edge (the knife-edge measurement,
+/// docs/lab/fidelity.md). Blurring along x then y with it, every edge's profile across it is
+/// exactly the 2-D profile's, because the pass along the edge integrates to 1. The radial
+/// sampling of SeparableSSS.h (`separable_kernel_for`) weighs each term by `1 / sqrt(v)` on
+/// top, which for skin's tabulated kernel is part of the paper's look but for a measured
+/// material's heavy red tail halved the edge width against the path tracer.
+pub fn separable_kernel_projected(
+    profile: &SumOfGaussians,
+    params: &KernelParams,
+    range_mm: f64,
+) -> Result<Vec<[f32; 4]>> {
+    separable_kernel_for(&profile.projected(), params, range_mm)
 }
 
 /// Half-width (mm) over which the jittered few-sample mode moves each separable tap: a quarter

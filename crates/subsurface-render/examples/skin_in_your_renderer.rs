@@ -28,7 +28,7 @@
 use std::error::Error;
 use std::path::PathBuf;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use subsurface_render::gpu_scene::{camera_uniform, object_uniform, world_per_mm};
@@ -212,17 +212,17 @@ fn fs_forward(in: Varying, @builtin(front_facing) front: bool) -> Lit {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ViewUniform {
     view_proj: [[f32; 4]; 4],
-    position: [f32; 4],
-    forward: [f32; 4],
+    position: Vec4,
+    forward: Vec4,
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct LightData {
-    position: [f32; 4],
-    direction: [f32; 4],
-    color: [f32; 4],
-    cone: [f32; 4],
+    position: Vec4,
+    direction: Vec4,
+    color: Vec4,
+    cone: Vec4,
     view_proj: [[f32; 4]; 4],
 }
 
@@ -230,18 +230,18 @@ struct LightData {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct LightsData {
     count: [u32; 4],
-    ambient: [f32; 4],
+    ambient: Vec4,
     lights: [LightData; 8],
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct MaterialData {
-    model: [[f32; 4]; 4],
-    normal_matrix: [[f32; 4]; 4],
-    albedo: [f32; 4],
-    params: [f32; 4],
-    sss: [f32; 4],
+    model: Mat4,
+    normal_matrix: Mat4,
+    albedo: Vec4,
+    params: Vec4,
+    sss: Vec4,
 }
 
 /// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
@@ -326,18 +326,18 @@ pub fn render(
         let optics = cache.get(&object.material.medium, &field)?;
         let row = profiles.object_rows[i];
         let m = &object.material;
-        let albedo: [f32; 3] = std::array::from_fn(|c| object.albedo[c] * optics.diffuse_albedo[c]);
+        let albedo = Vec3::from(object.albedo) * Vec3::from(optics.diffuse_albedo);
         let data = MaterialData {
-            model: object.transform.to_cols_array_2d(),
-            normal_matrix: object.transform.inverse().transpose().to_cols_array_2d(),
-            albedo: [albedo[0], albedo[1], albedo[2], 1.0],
-            params: [
+            model: object.transform,
+            normal_matrix: object.transform.inverse().transpose(),
+            albedo: albedo.extend(1.0),
+            params: Vec4::new(
                 m.roughness,
                 m.specular,
                 optics.dipole.eta as f32,
                 m.sss_strength,
-            ],
-            sss: [world_per_mm(object), row as f32, 0.0, 0.0],
+            ),
+            sss: Vec4::new(world_per_mm(object), row as f32, 0.0, 0.0),
         };
         let material = uniform_group(
             device,
@@ -387,12 +387,7 @@ pub fn render(
     let shadow_array = util::array_view(&shadow_depth);
     let mut lights = LightsData {
         count: [lights_uniform.count, 0, 0, 0],
-        ambient: [
-            settings.ambient[0],
-            settings.ambient[1],
-            settings.ambient[2],
-            0.0,
-        ],
+        ambient: Vec3::from(settings.ambient).extend(0.0),
         lights: bytemuck::Zeroable::zeroed(),
     };
     for (i, l) in lights_uniform
@@ -407,15 +402,10 @@ pub fn render(
             .find(|s| s.light == i)
             .map_or(1, |s| s.size);
         lights.lights[i] = LightData {
-            position: [l.position[0], l.position[1], l.position[2], l.kind],
-            direction: [
-                l.direction[0],
-                l.direction[1],
-                l.direction[2],
-                l.first_layer,
-            ],
-            color: [l.color[0], l.color[1], l.color[2], l.shadow_bias],
-            cone: [l.cos_outer, l.cos_inner, size as f32, atlas as f32],
+            position: Vec3::from(l.position).extend(l.kind),
+            direction: Vec3::from(l.direction).extend(l.first_layer),
+            color: Vec3::from(l.color).extend(l.shadow_bias),
+            cone: Vec4::new(l.cos_outer, l.cos_inner, size as f32, atlas as f32),
             view_proj: l.view_proj[0],
         };
     }
@@ -451,8 +441,8 @@ pub fn render(
     });
     let view_data = ViewUniform {
         view_proj: camera.view_proj,
-        position: Vec3::from(camera.position).extend(1.0).to_array(),
-        forward: Vec3::from(camera.forward).extend(0.0).to_array(),
+        position: Vec3::from(camera.position).extend(1.0),
+        forward: Vec3::from(camera.forward).extend(0.0),
     };
     let view_buffer = buffer(
         device,
@@ -573,8 +563,8 @@ pub fn render(
     for (i, layer) in setup.layers.iter().enumerate() {
         let data = ViewUniform {
             view_proj: layer.view_proj.to_cols_array_2d(),
-            position: [0.0; 4],
-            forward: [0.0; 4],
+            position: Vec4::ZERO,
+            forward: Vec4::ZERO,
         };
         let group = uniform_group(
             device,

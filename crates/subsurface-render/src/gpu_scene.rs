@@ -10,6 +10,7 @@ use crate::error::RenderError;
 use crate::gpu::GpuContext;
 use crate::material::{MaterialCache, MaterialOptics};
 use crate::passes::transmittance::lut_texture;
+use crate::passes::util::bind_group;
 use crate::scene::{Object, Scene};
 use crate::uniforms::{CameraUniform, ObjectUniform, mat};
 
@@ -297,40 +298,21 @@ pub fn upload_objects(
             )
         });
         let (albedo, normal, specular) = (albedo?, normal?, specular?);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(&label),
+        let view = wgpu::BindingResource::TextureView;
+        let bind_group = bind_group(
+            device,
+            &label,
             layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&albedo),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&normal),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&specular),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(lut),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::Sampler(&lut_sampler),
-                },
+            [
+                (0, uniform.as_entire_binding()),
+                (1, view(&albedo)),
+                (2, view(&normal)),
+                (3, view(&specular)),
+                (4, wgpu::BindingResource::Sampler(&sampler)),
+                (5, view(lut)),
+                (6, wgpu::BindingResource::Sampler(&lut_sampler)),
             ],
-        });
+        );
         out.push(GpuObject {
             vertices,
             indices,

@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::{context, scene};
+use common::{context, light_toml, scene};
 use subsurface_render::{RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod};
 
-const BASE: &str = r#"
+const VIEW: &str = r#"
 [camera]
 position = [0.0, 0.0, 0.3]
 target = [0.0, 0.0, 0.0]
@@ -16,14 +16,10 @@ far = 2.0
 [render]
 width = 64
 height = 48
-[[lights]]
-kind = "spot"
-position = [0.0, 0.05, -0.3]
-target = [0.0, 0.0, 0.0]
-intensity = 2.0
-shadow_map_size = 256
-shadow_bias = 0.0005
-[[lights]]
+"#;
+
+/// After the spot light behind the objects.
+const REST: &str = r#"[[lights]]
 kind = "point"
 position = [0.1, 0.1, 0.3]
 intensity = 0.05
@@ -36,6 +32,17 @@ mesh = { shape = "slab", width = 0.05, height = 0.05, thickness = 0.003 }
 translation = [0.05, 0.0, 0.0]
 material = { albedo = [0.8, 0.8, 0.8], medium = "marble" }
 "#;
+
+/// The backlit scene the edits change: `VIEW`, a spot light behind the objects, `REST`.
+fn base() -> String {
+    let spot = light_toml(
+        "spot",
+        [0.0, 0.05, -0.3],
+        2.0,
+        "shadow_map_size = 256\nshadow_bias = 0.0005",
+    );
+    [VIEW, &spot, REST].concat()
+}
 
 /// Edits of the base scene, each at a documented extreme: by the line they follow, the
 /// `key = value` lines inserted there and what they set.
@@ -75,7 +82,7 @@ const EDITS: &[(&str, &[(&str, &str)])] = &[
 ];
 
 fn edited(anchor: &str, line: &str) -> Scene {
-    let text = BASE.replacen(anchor, &format!("{anchor}\n{line}"), 1);
+    let text = base().replacen(anchor, &format!("{anchor}\n{line}"), 1);
     // Keys given twice (the base's and the edit's) keep the edit.
     let text = dedup_keys(&text);
     scene(&text)
@@ -140,7 +147,7 @@ fn hdr_targets_stay_finite_at_every_extreme() {
             }
         }
     }
-    let base = scene(BASE);
+    let base = scene(&base());
     for sss in SssMethod::ALL {
         for t in TransmittanceMethod::ALL {
             cases.push((format!("{sss}+{t}"), base.clone(), sss, t, false));
@@ -179,7 +186,7 @@ fn hdr_targets_stay_finite_at_every_extreme() {
 fn every_radiance_at_f32_max_at_once_stays_finite() {
     let Some(ctx) = context() else { return };
     let max = "3.4e38";
-    let text = BASE
+    let text = base()
         .replace(
             "[render]",
             &format!("[render]\nambient = [{max}, {max}, {max}]"),

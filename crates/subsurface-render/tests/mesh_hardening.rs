@@ -44,6 +44,17 @@ fn quad_err(name: &str, parts: &[&str], edit: impl FnOnce(&mut Model)) {
     expect_err(&bytes, name, parts);
 }
 
+/// [`quad_err`] with one field of the quad's JSON set: `json[table][index][key] = value`.
+fn quad_field_err(
+    name: &str,
+    parts: &[&str],
+    (table, index, key): (&str, usize, &str),
+    value: impl Into<gltf::json::Value>,
+) {
+    let value = value.into();
+    quad_err(name, parts, |m| m.json[table][index][key] = value);
+}
+
 #[test]
 fn valid_quad_loads_as_gltf_and_glb() {
     for (bytes, name) in [
@@ -269,17 +280,21 @@ fn bad_sparse_indices_are_errors() {
 
 #[test]
 fn index_accessor_with_count_zero_is_an_error_not_unindexed() {
-    quad_err("zero.gltf", &["index accessor 3", "count 0"], |m| {
-        m.json["accessors"][3]["count"] = 0.into();
-    });
+    quad_field_err(
+        "zero.gltf",
+        &["index accessor 3", "count 0"],
+        ("accessors", 3, "count"),
+        0,
+    );
 }
 
 #[test]
 fn index_count_not_a_multiple_of_three_is_an_error() {
-    quad_err(
+    quad_field_err(
         "five.gltf",
         &["index accessor 3", "count 5", "multiple of 3"],
-        |m| m.json["accessors"][3]["count"] = 5.into(),
+        ("accessors", 3, "count"),
+        5,
     );
     quad_err(
         "noidx.gltf",
@@ -302,62 +317,66 @@ fn index_past_the_vertex_count_is_an_error() {
 
 #[test]
 fn index_accessor_past_its_buffer_is_an_error_not_unindexed() {
-    quad_err(
+    quad_field_err(
         "short.glb",
         &["index accessor 3", "run past the end"],
-        |m| {
-            m.json["bufferViews"][3]["byteLength"] = 6.into();
-        },
+        ("bufferViews", 3, "byteLength"),
+        6,
     );
-    quad_err(
+    quad_field_err(
         "view.glb",
         &["index accessor 3", "does not fit in buffer 0"],
-        |m| m.json["bufferViews"][3]["byteLength"] = 1000.into(),
+        ("bufferViews", 3, "byteLength"),
+        1000,
     );
-    quad_err("offset.glb", &["index accessor 3"], |m| {
-        m.json["accessors"][3]["byteOffset"] = v("18446744073709551000");
-    });
+    quad_field_err(
+        "offset.glb",
+        &["index accessor 3"],
+        ("accessors", 3, "byteOffset"),
+        v("18446744073709551000"),
+    );
 }
 
 #[test]
 fn accessor_of_the_wrong_type_is_an_error() {
-    quad_err(
+    quad_field_err(
         "f32idx.glb",
         &["index accessor 3", "expected Scalar"],
-        |m| {
-            m.json["accessors"][3]["componentType"] = F32.into();
-        },
+        ("accessors", 3, "componentType"),
+        F32,
     );
-    quad_err(
+    quad_field_err(
         "vec2pos.glb",
         &["POSITION accessor 0", "expected Vec3"],
-        |m| {
-            m.json["accessors"][0]["type"] = v(r#""VEC2""#);
-        },
+        ("accessors", 0, "type"),
+        "VEC2",
     );
     // i8 UVs
-    quad_err("i8uv.glb", &["TEXCOORD_0 accessor 2"], |m| {
-        m.json["accessors"][2]["componentType"] = 5120.into();
-    });
+    quad_field_err(
+        "i8uv.glb",
+        &["TEXCOORD_0 accessor 2"],
+        ("accessors", 2, "componentType"),
+        5120,
+    );
 }
 
 #[test]
 fn stride_shorter_than_an_element_is_an_error() {
-    quad_err(
+    quad_field_err(
         "stride.glb",
         &["POSITION accessor 0", "byteStride 4"],
-        |m| {
-            m.json["bufferViews"][0]["byteStride"] = 4.into();
-        },
+        ("bufferViews", 0, "byteStride"),
+        4,
     );
 }
 
 #[test]
 fn attribute_counts_must_match() {
-    quad_err(
+    quad_field_err(
         "counts.glb",
         &["NORMAL accessor 1", "3 elements", "has 4"],
-        |m| m.json["accessors"][1]["count"] = 3.into(),
+        ("accessors", 1, "count"),
+        3,
     );
 }
 

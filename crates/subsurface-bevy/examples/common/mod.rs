@@ -303,22 +303,30 @@ fn spawn_scene(
     let radius = (hi - lo).length() * 0.5;
     for l in &scene.desc.lights {
         let (pos, aim) = (vec3(l.position), vec3(l.target));
-        let d = pos.distance(aim).max(1e-6);
         let color = Color::linear_rgb(l.color[0], l.color[1], l.color[2]);
         let shadows = l.shadow_map_size > 0;
         match l.kind {
-            // Spot and directional lights become directional ones, aimed the same way, with
-            // the scene's irradiance at the target: the plugin's transmittance reads Bevy's
-            // directional shadow cascades.
-            LightKind::Spot | LightKind::Directional => {
-                let illuminance = match l.kind {
-                    LightKind::Spot => l.intensity / (d * d),
-                    _ => l.intensity,
-                } * 1.2;
+            // Spot lights stay spot lights (the plugin's transmittance reads their maps as it
+            // reads a directional light's cascade).
+            LightKind::Spot => {
+                commands.spawn((
+                    SpotLight {
+                        color,
+                        intensity: l.intensity * LUMENS_PER_INTENSITY,
+                        shadow_maps_enabled: shadows,
+                        range: 100.0 * radius,
+                        inner_angle: l.inner_angle_deg.to_radians(),
+                        outer_angle: l.outer_angle_deg.to_radians(),
+                        ..default()
+                    },
+                    Transform::from_translation(pos).looking_at(aim, Vec3::Y),
+                ));
+            }
+            LightKind::Directional => {
                 commands.spawn((
                     DirectionalLight {
                         color,
-                        illuminance,
+                        illuminance: l.intensity * 1.2,
                         shadow_maps_enabled: shadows,
                         ..default()
                     },

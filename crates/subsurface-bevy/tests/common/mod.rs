@@ -7,11 +7,13 @@ use std::time::{Duration, Instant};
 
 use bevy::app::PluginsState;
 use bevy::camera::{Hdr, RenderTarget};
+use bevy::color::ColorToPacked;
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy::window::ExitCondition;
+use subsurface_bevy::{Skin, SkinMaterial};
 
 pub const WIDTH: u32 = 160;
 pub const HEIGHT: u32 = 120;
@@ -173,6 +175,12 @@ pub fn spawn_scene(app: &mut App, sphere_material: impl Bundle) {
     ));
 }
 
+/// The scene of [`spawn_scene`] with `sphere_material`, rendered until stable.
+pub fn render_scene(h: &mut Headless, sphere_material: impl Bundle) -> Vec<u8> {
+    spawn_scene(&mut h.app, sphere_material);
+    render_until_stable(h, 600)
+}
+
 /// A pixel of the image: linear RGBA.
 pub fn pixel(data: &[u8], x: u32, y: u32) -> [f32; 4] {
     let i = 8 * (y * WIDTH + x) as usize;
@@ -191,6 +199,33 @@ pub fn pixel_bits(data: &[u8], x: u32, y: u32) -> [u8; 8] {
 /// this tells those frames from a finished one.
 pub fn is_magenta(p: [f32; 4]) -> bool {
     p[0] > 0.5 && p[2] > 0.5 && p[1] < 0.2 * p[0]
+}
+
+/// Relative luminance (Rec. 709) of a linear pixel.
+pub fn luminance(p: [f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// Adds `asset` to the app's `Assets<A>`.
+pub fn add_asset<A: Asset>(app: &mut App, asset: A) -> Handle<A> {
+    app.world_mut().resource_mut::<Assets<A>>().add(asset)
+}
+
+/// The frames `render` gives with what a test compares switched off (`false`) and on
+/// (`true`); None when the test is skipped for want of an adapter ([`gpu_available`]).
+pub fn off_and_on(render: impl Fn(bool) -> Vec<u8>) -> Option<(Vec<u8>, Vec<u8>)> {
+    gpu_available().then(|| (render(false), render(true)))
+}
+
+/// Asserts that the mean light a scattering step added per channel, `gain`, is at least
+/// `min_red` in red and falls by more than `ratio` from red to green and from green to blue:
+/// skin's red travels furthest. `none` and `not_reddest` say what failed.
+pub fn assert_reddest(gain: [f64; 3], min_red: f64, ratio: f64, none: &str, not_reddest: &str) {
+    assert!(gain[0] > min_red, "{none}: {gain:?}");
+    assert!(
+        gain[0] > ratio * gain[1] && gain[1] > ratio * gain[2],
+        "{not_reddest}: {gain:?}"
+    );
 }
 
 /// Where a world point lands in the image (pixel coordinates).
@@ -244,18 +279,9 @@ pub fn dump(data: &[u8], name: &str) {
     let Ok(dir) = std::env::var("SUBSURFACE_BEVY_OUT") else {
         return;
     };
-    let srgb = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        let s = if v <= 0.0031308 {
-            12.92 * v
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
     let img = image::RgbImage::from_fn(WIDTH, HEIGHT, |x, y| {
         let p = pixel(data, x, y);
-        image::Rgb([srgb(p[0]), srgb(p[1]), srgb(p[2])])
+        image::Rgb(Srgba::from(LinearRgba::rgb(p[0], p[1], p[2])).to_u8_array_no_alpha())
     });
     std::fs::create_dir_all(&dir).unwrap();
     let path = std::path::Path::new(&dir).join(format!("{name}.png"));
@@ -298,21 +324,28 @@ pub fn add_camera(h: &mut Headless, transform: Transform, extra: impl Bundle) ->
     slot
 }
 
-/// A matte white skin material of `medium` at profile `width`: the tests read the light the
-/// skin adds, not its colour.
-pub fn white_skin(
+/// A skin material: `base` with the skin extension of `medium` at profile `width`.
+pub fn add_skin(
     world: &mut World,
+    base: StandardMaterial,
     medium: &str,
     width: f32,
-) -> Handle<subsurface_bevy::SkinMaterial> {
+) -> Handle<SkinMaterial> {
     world
-        .resource_mut::<Assets<subsurface_bevy::SkinMaterial>>()
-        .add(subsurface_bevy::SkinMaterial {
-            base: StandardMaterial {
-                base_color: Color::WHITE,
-                perceptual_roughness: 0.8,
-                ..default()
-            },
-            extension: subsurface_bevy::Skin::new(medium, width),
+        .resource_mut::<Assets<SkinMaterial>>()
+        .add(SkinMaterial {
+            base,
+            extension: Skin::new(medium, width),
         })
+}
+
+/// A matte white skin material of `medium` at profile `width`: the tests read the light the
+/// skin adds, not its colour.
+pub fn white_skin(world: &mut World, medium: &str, width: f32) -> Handle<SkinMaterial> {
+    let base = StandardMaterial {
+        base_color: Color::WHITE,
+        perceptual_roughness: 0.8,
+        ..default()
+    };
+    add_skin(world, base, medium, width)
 }

@@ -10,9 +10,16 @@ pub(super) struct Traffic {
     #[serde(flatten)]
     pub(super) model: PassTraffic,
     pub(super) ms: f64,
-    /// Time the compulsory bytes take at `--bandwidth`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) bound_ms: Option<f64>,
+    /// With `--bandwidth` only.
+    #[serde(flatten)]
+    pub(super) bound: Option<MemoryBound>,
+}
+
+/// A pass's time against the memory limit at `--bandwidth`.
+#[derive(Serialize)]
+pub(super) struct MemoryBound {
+    /// Time the compulsory bytes take at that rate.
+    pub(super) bound_ms: f64,
     /// `ms / bound_ms`: how many times the memory limit the pass takes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) over_bound: Option<f64>,
@@ -33,13 +40,14 @@ pub(super) fn traffic_of(
         .chain([(traffic::copy_traffic(w, h), copy_ms)]);
     models
         .map(|(model, ms)| {
-            let bound_ms = gbps.map(|g| model.bound_ms(g));
-            Traffic {
-                over_bound: bound_ms.filter(|b| *b > 0.0 && ms > 0.0).map(|b| ms / b),
-                model,
-                ms,
-                bound_ms,
-            }
+            let bound = gbps.map(|g| {
+                let bound_ms = model.bound_ms(g);
+                MemoryBound {
+                    bound_ms,
+                    over_bound: (bound_ms > 0.0 && ms > 0.0).then(|| ms / bound_ms),
+                }
+            });
+            Traffic { model, ms, bound }
         })
         .collect()
 }

@@ -17,7 +17,9 @@ use crate::output::{PendingFile, print_summary};
 use crate::settings_args::{load_scene, replicate};
 use axes::{Axis, combinations, flag_axis};
 use memory::{flip_means, traffic_of};
-use report::{Report, Run, frame_sum, median, plot, sss_ms, summarise, table};
+use report::{
+    FlipVsFixed, Report, Run, SkinCost, frame_sum, median, plot, sss_ms, summarise, table,
+};
 
 mod axes;
 mod memory;
@@ -26,41 +28,34 @@ mod report;
 #[derive(Args, Debug)]
 pub struct BenchArgs {
     /// Scene file (default: the embedded default scene, the hand and the wedge).
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model.
     #[arg(long, value_name = "FILE.glb")]
-    pub model: Option<PathBuf>,
-    /// Image width; with --height, a single size instead of --sizes.
-    #[arg(long, requires = "height")]
-    pub width: Option<u32>,
-    /// Image height; with --width, a single size instead of --sizes.
-    #[arg(long, requires = "width")]
-    pub height: Option<u32>,
-    /// Image sizes to measure, WxH, comma-separated.
-    #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',', value_parser = parse_size)]
-    pub sizes: Vec<(u32, u32)>,
+    model: Option<PathBuf>,
+    #[command(flatten)]
+    size: SizeArgs,
     /// Numbers of characters (copies of the scene's objects, in a grid covering about the
     /// same screen area at every count), comma-separated.
     #[arg(long, default_value = "1", value_delimiter = ',')]
-    pub characters: Vec<u32>,
+    characters: Vec<u32>,
     /// Quality presets to measure, comma-separated (low, medium, high): each its bundle of
     /// settings with the scene's own keys and --set over it [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "PRESET,..")]
-    pub quality: Vec<Quality>,
+    quality: Vec<Quality>,
     /// SSS methods to measure, comma-separated (none, gaussian6, separable, hable13,
     /// texture); short for --vary render.sss.method=.. [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "METHOD,..")]
-    pub sss: Vec<SssMethod>,
+    sss: Vec<SssMethod>,
     /// Transmittance methods to measure, comma-separated (e.g. paper,off for the cost of
     /// transmittance side by side); short for --vary render.transmittance.method=..
     /// [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "METHOD,..")]
-    pub transmittance: Vec<TransmittanceMethod>,
+    transmittance: Vec<TransmittanceMethod>,
     /// Diffusion runs: numbers of lateral shadow-map taps (0..=32), comma-separated, e.g. 0,12
     /// for what gathering the light around the chord costs against the chord's slab alone
     /// [default: the scene's render.transmittance.lateral_taps].
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
-    pub lateral_taps: Vec<u32>,
+    lateral_taps: Vec<u32>,
     /// Diffusion runs: the transmitted map's texel sizes in profile millimetres (0..=50),
     /// comma-separated, e.g. 0,2 for `diffusion` at every pixel inside the lighting pass against
     /// the transmitted map [default: the scene's render.transmitted_map.texel_mm].
@@ -72,7 +67,7 @@ pub struct BenchArgs {
         value_name = "MM,..",
         alias = "lateral-texel-mm"
     )]
-    pub map_texel_mm: Vec<f32>,
+    map_texel_mm: Vec<f32>,
     /// Diffusion runs: how the transmitted map is evaluated, compute and/or fragment,
     /// comma-separated; the same map, so `compute,fragment` compares their cost [default: the
     /// scene's render.transmitted_map.pass]. The table marks fragment runs
@@ -83,73 +78,100 @@ pub struct BenchArgs {
         value_name = "PASS,..",
         alias = "lateral-pass"
     )]
-    pub map_pass: Vec<MapEvaluation>,
+    map_pass: Vec<MapEvaluation>,
     /// The bounce's ring (0..=8; 0 = off), comma-separated, e.g. 0,2 for what gathering the
     /// light between parts costs [default: the scene's render.bounce.ring]. The table names
     /// each run's ring after its transmittance (`paper b2`).
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
-    pub bounce_ring: Vec<u32>,
+    bounce_ring: Vec<u32>,
     /// Numbers of distinct diffusion profiles on screen, comma-separated: the objects (with
     /// --characters, the copies) take the material presets in turn, so the cost of a profile
     /// per material shows beside one profile for all.
     #[arg(long, default_value = "1", value_delimiter = ',', value_name = "N,..")]
-    pub profiles: Vec<u32>,
+    profiles: Vec<u32>,
     /// How the screen-space passes fetch a tap's texels, comma-separated: packed (one
     /// Rgba32Uint texel per texel, after a pack step), workgroup (packed, and separable's
     /// passes as compute shaders reading workgroup memory) and/or direct (colour, depth and SSS
     /// textures per texel); the same image, so `packed,workgroup,direct` compares their cost.
     /// Short for --vary render.sss.fetch=.. [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "FETCH,..")]
-    pub fetch: Vec<SssFetch>,
+    fetch: Vec<SssFetch>,
     /// Numbers of the scene's lights to keep (its first N), comma-separated, e.g. 1,5 on the
     /// head: the table then gives the lighting and shadow passes' cost per light (the slope
     /// between the smallest and the largest N) [default: all of the scene's lights].
     #[arg(long, value_delimiter = ',', value_name = "N,..")]
-    pub lights: Vec<u32>,
+    lights: Vec<u32>,
     /// Separable kernel taps [default: the scene's render.sss.samples].
     #[arg(long, value_name = "N")]
-    pub samples: Option<u32>,
+    samples: Option<u32>,
     /// Separable: jitter the taps per pixel (the few-sample mode, e.g. --samples 7 --jitter).
     #[arg(long)]
-    pub jitter: bool,
+    jitter: bool,
     /// Separable runs: also render the frame with N fixed taps and report the FLIP mean (LDR)
     /// of the measured settings against it, over the whole frame and over the skin pixels, e.g.
     /// --samples 7 --jitter --flip-vs 33 for the quality the few-sample mode gives up.
     #[arg(long, value_name = "N")]
-    pub flip_vs: Option<u32>,
+    flip_vs: Option<u32>,
     /// Memory bandwidth of the adapter in GB/s (10^9 bytes/s): prints each modelled pass's
     /// time against the time its compulsory bytes take at that rate (1 = at the memory limit).
     #[arg(long, value_name = "GBPS")]
-    pub bandwidth: Option<f64>,
+    bandwidth: Option<f64>,
     /// Any setting of the scene's [render] table, for every run: --set KEY=VALUE as `render`
     /// takes it (after the flags above; `subsurface settings` lists the keys).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::settings_args::parse_key_value)]
-    pub set: Vec<(String, String)>,
+    set: Vec<(String, String)>,
     /// Any setting as an axis: --vary KEY=V1,V2 measures each value (e.g. --vary
     /// render.sss.samples=7,17 --vary render.bounce.ring=0,2 measures four configurations);
     /// after the method flags, the last varying fastest. A value of a key that does not matter
     /// to a configuration (the separable taps of hable13) is measured once.
     #[arg(long = "vary", value_name = "KEY=V1,V2,..", value_parser = axes::parse_axis)]
-    pub vary: Vec<Axis>,
+    vary: Vec<Axis>,
     /// Frames rendered and thrown away before timing (shader compilation, caches).
     #[arg(long, default_value_t = 5)]
-    pub warmup: u32,
+    warmup: u32,
     /// Timed frames; the median of each pass is reported.
     #[arg(long, default_value_t = 30)]
-    pub frames: u32,
+    frames: u32,
     /// Measure every configuration this many times in turn (A, B, A, B, ...), each round with
     /// its own warm-up and frames, and report the median over all rounds' frames: a machine
     /// whose speed drifts over minutes (a CPU driver, a laptop's clocks) then shifts every
     /// configuration alike instead of whichever ran last. JSON gives each round's frame time.
     #[arg(long, default_value_t = 1, value_name = "N")]
-    pub rounds: u32,
+    rounds: u32,
     /// Print JSON instead of a table.
     #[arg(long)]
-    pub json: bool,
+    json: bool,
     /// Draw GPU time against the number of characters, one line per method; `-` writes the
     /// PNG to standard output and the table to standard error.
     #[arg(long, value_name = "FILE.png")]
-    pub plot: Option<PathBuf>,
+    plot: Option<PathBuf>,
+}
+
+/// The image sizes to measure.
+#[derive(Args, Debug)]
+struct SizeArgs {
+    /// Image width; with --height, a single size instead of --sizes.
+    #[arg(long, requires = "height")]
+    width: Option<u32>,
+    /// Image height; with --width, a single size instead of --sizes.
+    #[arg(long, requires = "width")]
+    height: Option<u32>,
+    /// Image sizes to measure, WxH, comma-separated.
+    #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',', value_parser = parse_size)]
+    sizes: Vec<(u32, u32)>,
+}
+
+impl SizeArgs {
+    /// `--width` x `--height` where both are given, else `--sizes`.
+    fn sizes(&self) -> Result<Vec<(u32, u32)>> {
+        Ok(match (self.width, self.height) {
+            (Some(w), Some(h)) => vec![
+                parse_size(&format!("{w}x{h}"))
+                    .map_err(|e| anyhow::anyhow!("--width/--height: {e}"))?,
+            ],
+            _ => self.sizes.clone(),
+        })
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -231,13 +253,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "--profiles: each must be in 1..=256 (got {p})"
         );
     }
-    let sizes = match (args.width, args.height) {
-        (Some(w), Some(h)) => vec![
-            parse_size(&format!("{w}x{h}"))
-                .map_err(|e| anyhow::anyhow!("--width/--height: {e}"))?,
-        ],
-        _ => args.sizes.clone(),
-    };
+    let sizes = args.size.sizes()?;
     let base = load_scene(args.scene.as_ref(), args.model.as_ref())?;
     let settings = base_settings(&base.desc.render, args)?;
     let keep: Vec<(String, String)> = base
@@ -363,8 +379,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             continue;
         };
         if let Some(base) = bare_ms[bare].filter(|b| *b > 0.0) {
-            run.skin_ms = Some(run.frame_ms - base);
-            run.skin_share = Some((run.frame_ms - base) / base);
+            run.skin = Some(SkinCost {
+                skin_ms: run.frame_ms - base,
+                skin_share: (run.frame_ms - base) / base,
+            });
         }
         report_runs.push(run);
     }
@@ -486,8 +504,11 @@ fn describe(
             .context("--flip-vs")?
             .render()?
             .image;
-        let (all, on_skin) = flip_means(&reference, &ours, &skin);
-        (run.flip_vs_fixed, run.flip_vs_fixed_skin) = (Some(all), on_skin);
+        let (flip_vs_fixed, flip_vs_fixed_skin) = flip_means(&reference, &ours, &skin);
+        run.flip = Some(FlipVsFixed {
+            flip_vs_fixed,
+            flip_vs_fixed_skin,
+        });
     }
     Ok(())
 }

@@ -50,13 +50,9 @@ pub(super) struct Run {
     /// `--rounds`: each round's median frame time, in the order they ran.
     pub(super) round_frame_ms: Vec<f64>,
     pub(super) passes: Vec<PassTiming>,
-    /// The skin's cost: this frame less the same scene's frame without any skin effect (no
-    /// scattering, transmittance or bounce), measured in the same rounds; and that as a share
-    /// of the frame without them.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) skin_ms: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) skin_share: Option<f64>,
+    /// Where the same scene's frame without any skin effect was measured.
+    #[serde(flatten)]
+    pub(super) skin: Option<SkinCost>,
     /// A plain full-screen copy of the diffuse target, measured in the same frames.
     pub(super) copy_ms: f64,
     /// GPU time of the subsurface-scattering passes divided by the copy's.
@@ -64,14 +60,29 @@ pub(super) struct Run {
     /// Separable taps and whether they were jittered.
     pub(super) samples: u32,
     pub(super) jitter: bool,
-    /// FLIP mean of the frame against the `--flip-vs` fixed-tap frame (separable runs): over
-    /// the whole frame, and over the skin pixels only (where SSS changes anything).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) flip_vs_fixed: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(super) flip_vs_fixed_skin: Option<f64>,
+    /// With `--flip-vs`, separable runs only.
+    #[serde(flatten)]
+    pub(super) flip: Option<FlipVsFixed>,
     /// Bytes the modelled passes must move (passes::traffic), with the measured time.
     pub(super) traffic: Vec<Traffic>,
+}
+
+/// The skin's cost: the frame less the same scene's frame without any skin effect (no
+/// scattering, transmittance or bounce), measured in the same rounds; and that as a share of
+/// the frame without them.
+#[derive(Serialize)]
+pub(super) struct SkinCost {
+    pub(super) skin_ms: f64,
+    pub(super) skin_share: f64,
+}
+
+/// FLIP mean of the frame against the `--flip-vs` fixed-tap frame: over the whole frame, and
+/// over the skin pixels only (where SSS changes anything; None without skin pixels).
+#[derive(Serialize)]
+pub(super) struct FlipVsFixed {
+    pub(super) flip_vs_fixed: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) flip_vs_fixed_skin: Option<f64>,
 }
 
 impl Run {
@@ -213,14 +224,12 @@ pub(super) fn summarise(samples: Vec<Vec<PassTiming>>, characters: u32, s: &Rend
         frame_ms,
         round_frame_ms: Vec::new(),
         passes,
-        skin_ms: None,
-        skin_share: None,
+        skin: None,
         copy_ms,
         sss_over_copy: (sss_ms > 0.0 && copy_ms > 0.0).then(|| sss_ms / copy_ms),
         samples: s.sss.samples,
         jitter: s.sss.jitter,
-        flip_vs_fixed: None,
-        flip_vs_fixed_skin: None,
+        flip: None,
         traffic: Vec::new(),
     }
 }
@@ -275,21 +284,28 @@ pub(super) fn table(report: &Report) -> String {
             p("lighting"),
             sss,
             r.sss_over_copy.map_or("-".into(), |x| format!("{x:.2}")),
-            r.skin_ms.map_or("-".into(), |x| format!("{x:.3}")),
-            r.skin_share
-                .map_or("-".into(), |x| format!("{:.1}", 100.0 * x)),
+            r.skin
+                .as_ref()
+                .map_or("-".into(), |c| format!("{:.3}", c.skin_ms)),
+            r.skin
+                .as_ref()
+                .map_or("-".into(), |c| format!("{:.1}", 100.0 * c.skin_share)),
         );
     }
     if let Some(n) = report.flip_vs {
         out += &format!("\nFLIP mean of the frame against {n} fixed taps (separable runs)\n");
-        for r in report.runs.iter().filter(|r| r.flip_vs_fixed.is_some()) {
+        for (r, flip) in report
+            .runs
+            .iter()
+            .filter_map(|r| r.flip.as_ref().map(|f| (r, f)))
+        {
             out += &format!(
                 "{:>10} {} taps{}: {:.4} (skin pixels: {})\n",
                 format!("{}x{}", r.width, r.height),
                 r.samples,
                 if r.jitter { " jittered" } else { "" },
-                r.flip_vs_fixed.unwrap_or(0.0),
-                r.flip_vs_fixed_skin
+                flip.flip_vs_fixed,
+                flip.flip_vs_fixed_skin
                     .map_or("-".into(), |f| format!("{f:.4}"))
             );
         }
@@ -452,8 +468,13 @@ fn traffic_table(report: &Report) -> String {
                 mb(t.model.write_bytes),
                 mb(t.model.read_bytes_per_tap + t.model.write_bytes),
                 t.ms,
-                t.bound_ms.map_or("-".into(), |b| format!("{b:.3}")),
-                t.over_bound.map_or("-".into(), |x| format!("{x:.1}")),
+                t.bound
+                    .as_ref()
+                    .map_or("-".into(), |b| format!("{:.3}", b.bound_ms)),
+                t.bound
+                    .as_ref()
+                    .and_then(|b| b.over_bound)
+                    .map_or("-".into(), |x| format!("{x:.1}")),
             );
         }
     }

@@ -24,40 +24,40 @@ use crate::settings_args::{SettingsArgs, load_scene};
 #[derive(Args, Debug)]
 pub struct CompareArgs {
     /// Path-traced reference: a linear-radiance EXR of the scene (tools/reference/).
-    pub reference: PathBuf,
+    reference: PathBuf,
     /// Scene file (TOML). Without it, the embedded default scene. Rendered at the scene's size,
     /// which must be the reference's.
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Side-by-side image: real-time | reference | FLIP error.
     #[arg(long, short, default_value = "compare.png", value_name = "FILE.png")]
-    pub out: PathBuf,
+    out: PathBuf,
     /// Named regions (JSON, see docs/lab/fidelity.md) [default: SCENE.regions.json beside the
     /// scene, if present].
     #[arg(long, value_name = "FILE.json")]
-    pub regions: Option<PathBuf>,
+    regions: Option<PathBuf>,
     /// Knife-edge scenes (an `edge` in the regions file): plot the curves across the edge,
     /// real-time and reference per channel, as a PNG (`-`: standard output).
     #[arg(long, value_name = "FILE.png")]
-    pub plot: Option<PathBuf>,
+    plot: Option<PathBuf>,
     /// Also write the real-time linear radiance that was compared (diffuse after SSS plus
     /// specular, the reference's units, before exposure and tone mapping) as an RGB float EXR,
     /// for analysis beside the reference.
     #[arg(long, value_name = "FILE.exr")]
-    pub linear: Option<PathBuf>,
+    linear: Option<PathBuf>,
     /// Render N x N samples per reference pixel (at N times the size) and average them, as
     /// the path tracer's box filter averages each pixel's area: a silhouette's thin rim, where
     /// light crosses a fraction of a millimetre of skin, is far brighter than the pixel
     /// centre that one sample shades, so at one sample the comparison measures the sampling
     /// as much as the method. 1..=8.
     #[arg(long, default_value_t = 1, value_name = "N")]
-    pub supersample: u32,
+    supersample: u32,
     /// Print the results as one JSON object instead of text.
     #[arg(long)]
-    pub json: bool,
+    json: bool,
     /// The settings to render with (--exposure-ev also sets the exposure of the tone-mapped
     /// images that FLIP and the side-by-side image compare).
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    settings: SettingsArgs,
 }
 
 /// A named rectangle in normalised image coordinates (0..1, origin top left); its pixels are

@@ -34,42 +34,42 @@ use state::ViewerState;
 #[derive(Args, Debug)]
 pub struct ViewArgs {
     /// Scene file (TOML; the viewer's saved scenes too). Without it, the embedded default scene.
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// Replace the scene's objects by this glTF/GLB model; the camera is re-aimed to frame it.
     #[arg(long, value_name = "FILE.glb")]
-    pub model: Option<PathBuf>,
+    model: Option<PathBuf>,
     /// Debug view to start with.
     #[arg(long, value_enum)]
-    pub view: Option<ViewArg>,
+    view: Option<ViewArg>,
     /// The scene's settings, overridden as `subsurface render` does; --width/--height give the
     /// window's inner size in physical pixels (default: the scene's size in logical pixels,
     /// widened by the panel's width so that the panel covers none of the scene at first).
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    settings: SettingsArgs,
     /// Start in split screen: the settings above on the left, this SSS method on the right.
     #[arg(long, value_name = "METHOD")]
-    pub compare: Option<SssMethod>,
+    compare: Option<SssMethod>,
     /// Present without waiting for vertical sync (frame times then show the GPU's pace).
     #[arg(long)]
-    pub no_vsync: bool,
+    no_vsync: bool,
     /// Scripted mode: render N frames in the window, then write --screenshot/--save-scene and
     /// exit (non-zero on any error).
     #[arg(long, value_name = "N")]
-    pub frames: Option<u32>,
+    frames: Option<u32>,
     /// With --frames: PNG of the 3D view (the renderer's image, no panel) after the last
     /// frame.
     #[arg(long, value_name = "FILE.png")]
-    pub screenshot: Option<PathBuf>,
+    screenshot: Option<PathBuf>,
     /// With --frames: save the settings as a scene file after the last frame.
     #[arg(long, value_name = "FILE.toml")]
-    pub save_scene: Option<PathBuf>,
+    save_scene: Option<PathBuf>,
     /// With --frames: destroy the GPU device after this frame, to test recovery.
     #[arg(long, value_name = "FRAME", hide = true)]
-    pub lose_device_at: Option<u32>,
+    lose_device_at: Option<u32>,
     /// With --frames: change the methods, lights and window size every frame and fail if
     /// memory, GPU memory or wgpu objects grow (the viewer soak test).
     #[arg(long, hide = true)]
-    pub soak: bool,
+    soak: bool,
 }
 
 /// Loads the scene and applies the command line on top of it.

@@ -191,16 +191,18 @@ mod tests {
             (Vec3::from(c.position), Vec3::from(c.target))
         }
 
-        /// [`eye`](Self::eye) before and after a drag with no modifier keys.
-        fn eye_around_drag(
-            &mut self,
+        /// A new harness after a drag with no modifier keys, with its [`eye`](Self::eye)
+        /// before and after the drag.
+        fn dragged(
             button: PointerButton,
             from: Pos2,
             to: Pos2,
-        ) -> ((Vec3, Vec3), (Vec3, Vec3)) {
-            let before = self.eye();
-            self.drag(button, from, to, Modifiers::NONE);
-            (before, self.eye())
+        ) -> (Self, (Vec3, Vec3), (Vec3, Vec3)) {
+            let mut h = Self::new();
+            let before = h.eye();
+            h.drag(button, from, to, Modifiers::NONE);
+            let after = h.eye();
+            (h, before, after)
         }
     }
 
@@ -214,8 +216,7 @@ mod tests {
 
     #[test]
     fn left_drag_of_half_the_height_orbits_a_quarter_turn() {
-        let mut h = Harness::new();
-        let ((eye0, target0), (eye1, target1)) = h.eye_around_drag(
+        let (h, (eye0, target0), (eye1, target1)) = Harness::dragged(
             PointerButton::Primary,
             pos2(200.0, 300.0),
             pos2(200.0 + H / 2.0, 300.0),
@@ -232,8 +233,7 @@ mod tests {
 
     #[test]
     fn middle_drag_pans_and_wheel_zooms() {
-        let mut h = Harness::new();
-        let ((eye0, target0), (eye1, target1)) = h.eye_around_drag(
+        let (mut h, (eye0, target0), (eye1, target1)) = Harness::dragged(
             PointerButton::Middle,
             pos2(400.0, 300.0),
             pos2(460.0, 300.0),

@@ -396,8 +396,22 @@ pub fn separable(
     kernels: &[ScreenKernels],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
-    let h = separable_pass(input, kernels, [1.0, 0.0], params)?;
-    Ok(separable_pass_on(input, &h, kernels, [0.0, 1.0], params))
+    let dirs = [[1.0, 0.0], [0.0, 1.0]];
+    two_passes(input, kernels, params, |color, pass| {
+        separable_pass_on(input, color, kernels, dirs[pass as usize], params)
+    })
+}
+
+/// The inputs checked, then `pass(color, 0)` (horizontal) of `input.color` and `pass(color,
+/// 1)` (vertical) of its result.
+fn two_passes(
+    input: &ScreenInput,
+    kernels: &[ScreenKernels],
+    params: &ScreenParams,
+    pass: impl Fn(&[[f32; 3]], u32) -> Vec<[f32; 3]>,
+) -> Result<Vec<[f32; 3]>> {
+    check_inputs(input, kernels, params)?;
+    Ok(pass(&pass(&input.color, 0), 1))
 }
 
 /// PCG's output hash (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering"): integer
@@ -472,9 +486,9 @@ pub fn separable_jittered(
     kernels: &[ScreenKernels],
     params: &ScreenParams,
 ) -> Result<Vec<[f32; 3]>> {
-    check_inputs(input, kernels, params)?;
-    let h = separable_jittered_pass_on(input, &input.color, kernels, 0, params);
-    Ok(separable_jittered_pass_on(input, &h, kernels, 1, params))
+    two_passes(input, kernels, params, |color, pass| {
+        separable_jittered_pass_on(input, color, kernels, pass, params)
+    })
 }
 
 /// One 7-tap Gaussian pass of standard deviation `sigma_mm` along `dir`.
