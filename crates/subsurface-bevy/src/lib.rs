@@ -61,7 +61,7 @@ pub mod render;
 mod shadow_lights;
 pub mod transmit;
 
-pub use material::{Skin, SkinMaterial, SkinMedia, SkinRow, SkinSpecular};
+pub use material::{Skin, SkinMaterial, SkinMedia, SkinMedium, SkinRow, SkinSpecular};
 pub use subsurface_render::settings::Quality;
 
 /// Errors of this crate. Nothing in the library panics on bad input: a medium that is not
@@ -69,7 +69,7 @@ pub use subsurface_render::settings::Quality;
 /// left unscattered.
 #[derive(Debug, thiserror::Error)]
 pub enum SubsurfaceError {
-    #[error("skin medium {0:?}: {1}")]
+    #[error("skin medium {0}: {1}")]
     Medium(String, String),
     #[error("skin width {0} must be finite and > 0")]
     Width(f32),

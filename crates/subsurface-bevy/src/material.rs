@@ -41,9 +41,10 @@ pub type SkinMaterial = ExtendedMaterial<StandardMaterial, Skin>;
 #[derive(Asset, AsBindGroup, Reflect, Clone, Debug)]
 #[uniform(100, SkinUniform)]
 pub struct Skin {
-    /// The medium: a preset of subsurface-profile (`"skin"`, d'Eon's skin profile, or a
-    /// measured medium of Jensen et al. 2001 such as `"skin1"`, `"marble"`).
-    pub medium: String,
+    /// The medium: a preset of subsurface-profile by name (`"skin"`, d'Eon's skin profile,
+    /// or a medium Jensen et al. 2001 measured, such as `"skin1"`, `"marble"`), or measured
+    /// coefficients ([`SkinMedium::Measured`]).
+    pub medium: SkinMedium,
     /// Multiplier on the physical size of the scattering profile, > 0.
     pub width: f32,
     /// This material's row of [`SkinMedia`], set by the plugin (`None` until then, or when
@@ -55,8 +56,84 @@ pub struct Skin {
     pub(crate) specular: bool,
 }
 
+/// What a skin scatters light as: the media scene files take under `medium`.
+#[derive(Reflect, Clone, Debug, PartialEq)]
+pub enum SkinMedium {
+    /// A preset of subsurface-profile by name (`subsurface_profile::material_names`).
+    Preset(String),
+    /// Measured coefficients per millimetre, red/green/blue: absorption `sigma_a`, reduced
+    /// scattering `sigma_s` (sigma_s (1 - g)), each in subsurface-profile's range, and the
+    /// boundary's relative index of refraction `eta` (1.3 for skin).
+    Measured {
+        sigma_a: [f64; 3],
+        sigma_s: [f64; 3],
+        eta: f64,
+    },
+}
+
+impl SkinMedium {
+    /// subsurface-profile's description of this medium.
+    pub fn profile_medium(&self) -> subsurface_profile::Medium {
+        match self {
+            SkinMedium::Preset(name) => subsurface_profile::Medium::Preset(name.clone()),
+            SkinMedium::Measured {
+                sigma_a,
+                sigma_s,
+                eta,
+            } => subsurface_profile::Medium::Coefficients(subsurface_profile::Coefficients {
+                sigma_a: *sigma_a,
+                sigma_s: *sigma_s,
+                eta: *eta,
+            }),
+        }
+    }
+}
+
+impl From<subsurface_profile::Medium> for SkinMedium {
+    fn from(medium: subsurface_profile::Medium) -> Self {
+        match medium {
+            subsurface_profile::Medium::Preset(name) => SkinMedium::Preset(name),
+            subsurface_profile::Medium::Coefficients(c) => SkinMedium::Measured {
+                sigma_a: c.sigma_a,
+                sigma_s: c.sigma_s,
+                eta: c.eta,
+            },
+        }
+    }
+}
+
+impl From<&str> for SkinMedium {
+    fn from(name: &str) -> Self {
+        SkinMedium::Preset(name.to_string())
+    }
+}
+
+impl From<String> for SkinMedium {
+    fn from(name: String) -> Self {
+        SkinMedium::Preset(name)
+    }
+}
+
+impl std::fmt::Display for SkinMedium {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SkinMedium::Preset(name) => write!(f, "{name:?}"),
+            SkinMedium::Measured {
+                sigma_a,
+                sigma_s,
+                eta,
+            } => write!(
+                f,
+                "measured (sigma_a {sigma_a:?}, sigma_s {sigma_s:?} per mm, eta {eta})"
+            ),
+        }
+    }
+}
+
 impl Skin {
-    pub fn new(medium: impl Into<String>, width: f32) -> Self {
+    /// A skin of `medium` (a preset's name, or [`SkinMedium::Measured`]) whose profile is
+    /// `width` times its physical size.
+    pub fn new(medium: impl Into<SkinMedium>, width: f32) -> Self {
         Self {
             medium: medium.into(),
             width,
@@ -98,7 +175,7 @@ impl MaterialExtension for Skin {
 /// One row of the profile table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkinRow {
-    pub medium: String,
+    pub medium: SkinMedium,
     pub width: f32,
     /// Linear diffuse albedo (`base_color` x (1 - metallic)) of the first material that took
     /// the row: the transmitted light's, as Bevy's forward pass keeps no albedo per pixel.
@@ -114,23 +191,25 @@ pub struct SkinMedia {
 }
 
 impl SkinMedia {
-    /// The row of this medium and width, added if new. The medium must be a known preset.
-    pub fn row(&mut self, medium: &str, width: f32) -> Result<u32, SubsurfaceError> {
+    /// The row of this medium and width, added if new. The medium must be a known preset
+    /// or coefficients in subsurface-profile's range.
+    pub fn row(&mut self, medium: &SkinMedium, width: f32) -> Result<u32, SubsurfaceError> {
         if !(width.is_finite() && width > 0.0) {
             return Err(SubsurfaceError::Width(width));
         }
-        subsurface_profile::Medium::Preset(medium.to_string())
+        medium
+            .profile_medium()
             .material()
             .map_err(|e| SubsurfaceError::Medium(medium.to_string(), e.to_string()))?;
         if let Some(i) = self
             .rows
             .iter()
-            .position(|r| r.medium == medium && r.width == width)
+            .position(|r| r.medium == *medium && r.width == width)
         {
             return Ok(i as u32);
         }
         let key = SkinRow {
-            medium: medium.to_string(),
+            medium: medium.clone(),
             width,
             albedo: [1.0; 3],
         };
@@ -383,27 +462,46 @@ mod tests {
     #[test]
     fn rows_are_shared_per_medium_and_width() {
         let mut media = SkinMedia::default();
-        assert_eq!(media.row("skin1", 1.0).unwrap(), 0);
-        assert_eq!(media.row("marble", 1.0).unwrap(), 1);
-        assert_eq!(media.row("skin1", 2.0).unwrap(), 2);
-        assert_eq!(media.row("skin1", 1.0).unwrap(), 0);
+        assert_eq!(media.row(&"skin1".into(), 1.0).unwrap(), 0);
+        assert_eq!(media.row(&"marble".into(), 1.0).unwrap(), 1);
+        assert_eq!(media.row(&"skin1".into(), 2.0).unwrap(), 2);
+        assert_eq!(media.row(&"skin1".into(), 1.0).unwrap(), 0);
         assert_eq!(media.rows.len(), 3);
+        // Measured media: equal coefficients share a row, others take their own.
+        let measured = |a: f64| SkinMedium::Measured {
+            sigma_a: [a, 0.17, 0.48],
+            sigma_s: [0.74, 0.88, 1.01],
+            eta: 1.3,
+        };
+        assert_eq!(media.row(&measured(0.032), 1.0).unwrap(), 3);
+        assert_eq!(media.row(&measured(0.04), 1.0).unwrap(), 4);
+        assert_eq!(media.row(&measured(0.032), 1.0).unwrap(), 3);
+        // A scene file's medium converts both ways.
+        let scene = measured(0.032).profile_medium();
+        assert_eq!(SkinMedium::from(scene), measured(0.032));
     }
 
     #[test]
     fn bad_media_and_widths_are_errors_not_rows() {
         let mut media = SkinMedia::default();
-        let e = media.row("unobtainium", 1.0).unwrap_err();
+        let e = media.row(&"unobtainium".into(), 1.0).unwrap_err();
         assert!(
-            matches!(e, SubsurfaceError::Medium(ref m, _) if m == "unobtainium"),
+            matches!(e, SubsurfaceError::Medium(ref m, _) if m == "\"unobtainium\""),
             "{e}"
         );
         for w in [0.0, -1.0, f32::NAN, f32::INFINITY] {
             assert!(matches!(
-                media.row("skin", w),
+                media.row(&"skin".into(), w),
                 Err(SubsurfaceError::Width(_))
             ));
         }
+        let bad = SkinMedium::Measured {
+            sigma_a: [0.032, 0.0, 0.48],
+            sigma_s: [0.74, 0.88, 1.01],
+            eta: 1.3,
+        };
+        let e = media.row(&bad, 1.0).unwrap_err().to_string();
+        assert!(e.contains("sigma_a.g"), "{e}");
         assert!(media.rows.is_empty());
     }
 
@@ -411,14 +509,14 @@ mod tests {
     fn the_table_stops_at_its_size() {
         let mut media = SkinMedia::default();
         for i in 0..MAX_ROWS {
-            media.row("skin", 1.0 + i as f32).unwrap();
+            media.row(&"skin".into(), 1.0 + i as f32).unwrap();
         }
         assert!(matches!(
-            media.row("skin", 0.5),
+            media.row(&"skin".into(), 0.5),
             Err(SubsurfaceError::TooManyRows { .. })
         ));
         // An existing row is still found.
-        assert_eq!(media.row("skin", 1.0).unwrap(), 0);
+        assert_eq!(media.row(&"skin".into(), 1.0).unwrap(), 0);
     }
 
     #[test]

@@ -78,7 +78,7 @@ fn kernels(
 ) -> Result<Vec<subsurface_profile::ScreenKernels>, SubsurfaceError> {
     let mut rows = Vec::with_capacity(media.rows.len().max(1));
     for row in &media.rows {
-        let medium = subsurface_profile::Medium::Preset(row.medium.clone());
+        let medium = row.medium.profile_medium();
         let optics = cache.get(&medium, "skin.medium")?;
         let desc = MaterialDesc {
             medium,
@@ -86,7 +86,7 @@ fn kernels(
         };
         rows.push(
             screen_kernels(&optics, &desc, settings.samples)
-                .map_err(|e| SubsurfaceError::Medium(row.medium.clone(), e.to_string()))?,
+                .map_err(|e| SubsurfaceError::Medium(row.medium.to_string(), e.to_string()))?,
         );
     }
     if rows.is_empty() {

@@ -6,7 +6,7 @@
 //! depth, the SSS texture and a G-buffer (world normal rebuilt from the depth buffer, the
 //! row's albedo):
 //! 1. one cascade per shadow-casting directional light (the first, the finest: see
-//!    [`crate::shadow_lights::CASCADE`]), each shadow-casting spot light's map and each
+//!    [`CASCADE`]), each shadow-casting spot light's map and each
 //!    shadow-casting point light's six cube faces are copied out of Bevy's shadow textures
 //!    (`ViewShadowBindings`) into a forward-Z
 //!    `Depth32Float` array of ours (forward_z.wgsl), the z-buffer layout subsurface-render's
@@ -14,7 +14,7 @@
 //! 2. `ShadowEntryPass` turns it into the skin's shadow maps (light distance, entry normal);
 //! 3. `TransmittedLightPass` adds the transmitted light into the main texture (diffuse,
 //!    blurred next by `SssPass`) and its unscattered part into a scratch texture, which
-//!    [`Transmit::add_unscattered`] adds onto the main texture after the blur.
+//!    `Transmit::add_unscattered` adds onto the main texture after the blur.
 //!
 //! Units: subsurface-render's radiance is albedo x irradiance (no 1/pi); Bevy's Lambert
 //! lobe is albedo / pi x illuminance x exposure. So each light's colour is Bevy's colour x
@@ -282,7 +282,7 @@ impl Transmit {
         let pass = TransmittedLightPass::new(device, &settings);
         let mut skin_media = Vec::with_capacity(media.rows.len());
         for (i, row) in media.rows.iter().enumerate() {
-            let medium = subsurface_profile::Medium::Preset(row.medium.clone());
+            let medium = row.medium.profile_medium();
             let optics = cache.get(&medium, "skin.medium")?;
             let desc = MaterialDesc {
                 medium,

@@ -8,14 +8,19 @@ mod common;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use common::*;
-use subsurface_bevy::{Subsurface, SubsurfacePlugin};
+use subsurface_bevy::{SkinMedium, Subsurface, SubsurfacePlugin};
 
 fn render(with_subsurface: bool) -> Vec<u8> {
     render_skin(with_subsurface, 0.6, 20.0, "skin1")
 }
 
 /// The scene of `common::spawn_scene` with a skin sphere of this roughness, width and medium.
-fn render_skin(with_subsurface: bool, roughness: f32, width: f32, medium: &str) -> Vec<u8> {
+fn render_skin(
+    with_subsurface: bool,
+    roughness: f32,
+    width: f32,
+    medium: impl Into<SkinMedium>,
+) -> Vec<u8> {
     render_full(with_subsurface, roughness, width, medium, Tonemapping::None)
 }
 
@@ -23,7 +28,7 @@ fn render_full(
     with_subsurface: bool,
     roughness: f32,
     width: f32,
-    medium: &str,
+    medium: impl Into<SkinMedium>,
     tonemapping: Tonemapping,
 ) -> Vec<u8> {
     let sub = with_subsurface.then(Subsurface::default);
@@ -34,7 +39,7 @@ fn render_camera(
     subsurface: Option<Subsurface>,
     roughness: f32,
     width: f32,
-    medium: &str,
+    medium: impl Into<SkinMedium>,
     tonemapping: Tonemapping,
 ) -> Vec<u8> {
     let mut app = app();
@@ -197,6 +202,36 @@ fn unknown_medium_draws_plain_pbr() {
         }
     }
     assert!(off == on, "the plugin changed an image without skin");
+}
+
+/// A medium given by its measured coefficients scatters as the preset they come from: skin1's
+/// (Jensen et al. 2001) give the preset's image bit for bit, and scatter (the image differs
+/// from the one without the plugin); coefficients out of range are logged and drawn as plain
+/// PBR, as an unknown preset is.
+#[test]
+fn measured_coefficients_scatter_as_their_preset() {
+    let skin1 = || SkinMedium::Measured {
+        sigma_a: [0.032, 0.17, 0.48],
+        sigma_s: [0.74, 0.88, 1.01],
+        eta: 1.3,
+    };
+    let Some((off, measured)) = off_and_on(|sub| render_skin(sub, 0.6, 20.0, skin1())) else {
+        return;
+    };
+    let preset = render_skin(true, 0.6, 20.0, "skin1");
+    assert!(measured != off, "the measured medium did not scatter");
+    assert!(
+        measured == preset,
+        "skin1's coefficients scatter unlike skin1"
+    );
+    let out_of_range = SkinMedium::Measured {
+        sigma_a: [-1.0, 0.17, 0.48],
+        sigma_s: [0.74, 0.88, 1.01],
+        eta: 1.3,
+    };
+    let plain = render_skin(true, 0.6, 20.0, out_of_range.clone());
+    let plain_off = render_skin(false, 0.6, 20.0, out_of_range);
+    assert!(plain == plain_off, "an invalid medium was drawn as skin");
 }
 
 /// With a tone mapper, Bevy's tone-mapping pass writes the camera's other main texture and

@@ -112,7 +112,7 @@ pub struct SettingsArgs {
     /// (0.1..=50) [default: render.bounce.cell_mm, 2].
     #[arg(long, value_name = "MM")]
     bounce_cell_mm: Option<f32>,
-    /// Any setting of the scene's [render] table by its key, after the flags above, e.g.
+    /// Any setting of the scene's `[render]` table by its key, after the flags above, e.g.
     /// --set render.sss.samples=9 --set transmittance.method=paper (values in TOML syntax; a
     /// bare word is a string). `subsurface settings` lists every key with its default.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]

@@ -284,19 +284,17 @@ fn spawn_scene(
         };
         let transform = Transform::from_matrix(Mat4::from_cols_array(&o.transform.to_cols_array()));
         let mesh = Mesh3d(meshes.add(bevy_mesh(&o.mesh)));
-        match &m.medium {
-            subsurface_profile::Medium::Preset(name) if m.sss_strength > 0.0 => {
-                // The profile is in millimetres of this object's own units.
-                let width = m.sss_width / (o.mm_per_unit * run.units_per_mm);
-                let skin = SkinMaterial {
-                    base,
-                    extension: Skin::new(name.clone(), width),
-                };
-                commands.spawn((mesh, MeshMaterial3d(skins.add(skin)), transform));
-            }
-            _ => {
-                commands.spawn((mesh, MeshMaterial3d(plain.add(base)), transform));
-            }
+        // Any medium a scene file takes, preset or measured, scatters in Bevy too.
+        if m.sss_strength > 0.0 {
+            // The profile is in millimetres of this object's own units.
+            let width = m.sss_width / (o.mm_per_unit * run.units_per_mm);
+            let skin = SkinMaterial {
+                base,
+                extension: Skin::new(m.medium.clone(), width),
+            };
+            commands.spawn((mesh, MeshMaterial3d(skins.add(skin)), transform));
+        } else {
+            commands.spawn((mesh, MeshMaterial3d(plain.add(base)), transform));
         }
     }
     let (lo, hi) = scene.bounds();

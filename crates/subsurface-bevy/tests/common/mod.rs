@@ -13,7 +13,7 @@ use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy::window::ExitCondition;
-use subsurface_bevy::{Skin, SkinMaterial};
+use subsurface_bevy::{Skin, SkinMaterial, SkinMedium};
 
 pub const WIDTH: u32 = 160;
 pub const HEIGHT: u32 = 120;
@@ -328,7 +328,7 @@ pub fn add_camera(h: &mut Headless, transform: Transform, extra: impl Bundle) ->
 pub fn add_skin(
     world: &mut World,
     base: StandardMaterial,
-    medium: &str,
+    medium: impl Into<SkinMedium>,
     width: f32,
 ) -> Handle<SkinMaterial> {
     world

@@ -116,7 +116,7 @@ pub struct BenchArgs {
     /// time against the time its compulsory bytes take at that rate (1 = at the memory limit).
     #[arg(long, value_name = "GBPS")]
     bandwidth: Option<f64>,
-    /// Any setting of the scene's [render] table, for every run: --set KEY=VALUE as `render`
+    /// Any setting of the scene's `[render]` table, for every run: --set KEY=VALUE as `render`
     /// takes it (after the flags above; `subsurface settings` lists the keys).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::settings_args::parse_key_value)]
     set: Vec<(String, String)>,
