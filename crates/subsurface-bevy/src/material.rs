@@ -197,10 +197,8 @@ impl SkinMedia {
         if !(width.is_finite() && width > 0.0) {
             return Err(SubsurfaceError::Width(width));
         }
-        medium
-            .profile_medium()
-            .material()
-            .map_err(|e| SubsurfaceError::Medium(medium.to_string(), e.to_string()))?;
+        // Every material asks each frame: a row already there was checked when it was added,
+        // so only a new medium builds its optics to check them.
         if let Some(i) = self
             .rows
             .iter()
@@ -208,6 +206,10 @@ impl SkinMedia {
         {
             return Ok(i as u32);
         }
+        medium
+            .profile_medium()
+            .material()
+            .map_err(|e| SubsurfaceError::Medium(medium.to_string(), e.to_string()))?;
         let key = SkinRow {
             medium: medium.clone(),
             width,
