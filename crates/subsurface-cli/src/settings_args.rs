@@ -45,8 +45,8 @@ pub struct SettingsArgs {
     #[arg(long)]
     jitter: bool,
     /// Screen space: how a tap fetches its texels, packed (a pack step first, then one
-    /// Rgba32Uint texel per texel), workgroup (packed, with separable's passes as compute
-    /// shaders that read each line once into workgroup memory) or direct (colour, depth and
+    /// Rgba32Uint texel per texel), workgroup (separable's passes as compute shaders that read
+    /// each line once into workgroup memory, the first packing as it loads) or direct (colour, depth and
     /// SSS textures per texel); the same image at a different cost [default: render.sss.fetch,
     /// workgroup].
     #[arg(long, value_name = "FETCH")]

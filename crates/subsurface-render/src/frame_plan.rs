@@ -113,9 +113,13 @@ pub struct FramePlan {
     pub map: TransmittedMapShape,
     /// The lighting pipeline most pixels are drawn with.
     pub lighting: LightingVariant,
-    /// For each uploaded object (those with triangles, in the scene's order): it gathers
-    /// `diffusion`'s lateral taps itself although the frame has a transmitted map.
+    /// For each uploaded object (those with triangles, in the scene's order): it evaluates
+    /// `diffusion` itself (with its lateral taps, if any) although the frame has a transmitted
+    /// map.
     pub taps_objects: Vec<bool>,
+    /// The `lateral` source of the pipeline those objects are drawn with: the taps per pixel,
+    /// or none where `diffusion` runs no taps.
+    pub taps_objects_lateral: u32,
     /// Each uploaded object's box on screen, for the transmitted map's compute dispatches.
     pub object_rects: Vec<Option<[u32; 4]>>,
 }
@@ -129,9 +133,14 @@ impl FramePlan {
         let lights = &scene.desc.lights;
         let map_downsample = map_downsample(scene, settings, width, height);
         let shadowed = lights.iter().any(|l| l.shadow_map_size > 0);
-        let diffusion_taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+        let diffusion = t.method == TransmittanceMethod::Diffusion;
+        let per_pixel = if t.lateral_taps > 0 {
+            lateral::TAPS
+        } else {
+            lateral::NONE
+        };
         // Lights without a shadow map transmit nothing.
-        let map_holds_transmitted = diffusion_taps && map_downsample > 1 && shadowed;
+        let map_holds_transmitted = diffusion && map_downsample > 1 && shadowed;
         // Point lights' six faces are not gathered (bounce.wgsl): only the others count.
         let bounced = lights
             .iter()
@@ -174,10 +183,10 @@ impl FramePlan {
                 (_, Some(_)) => bounce::MAP,
                 (_, None) => bounce::GATHER,
             },
-            lateral: match (diffusion_taps, map_downsample > 1) {
+            lateral: match (diffusion, map_downsample > 1) {
                 (false, _) => lateral::NONE,
                 (true, true) => lateral::MAP,
-                (true, false) => lateral::TAPS,
+                (true, false) => per_pixel,
             },
             terms: Terms::of(settings),
         };
@@ -191,6 +200,7 @@ impl FramePlan {
             map,
             lighting,
             taps_objects: lateral_taps_objects(scene, settings, width, height, map_downsample),
+            taps_objects_lateral: per_pixel,
             object_rects: screen_rects(scene, width, height),
         }
     }
@@ -213,14 +223,16 @@ impl FramePlan {
 /// the translucent object in view nearest in those terms (`skin_pixel_mm`), so that the
 /// map's texels are the same millimetres at any resolution and zoom (a farther object whose
 /// texels come out too coarse gathers its own taps, [`lateral_taps_objects`]). 1 (no
-/// map) unless `diffusion` runs lateral taps on the screen (texture-space diffusion takes its
-/// transmitted light from its UV-space pass).
+/// map) unless `diffusion` runs on the screen (texture-space diffusion takes its transmitted
+/// light from its UV-space pass). Without lateral taps the map still pays: the chord's slab,
+/// the ballistic lobe and single scattering change over millimetres too, and on a GPU whose
+/// fragment shading is slow for its size (the H200) evaluating them once per texel costs less
+/// than once per pixel (docs/lab/performance.md, session 28).
 pub fn map_downsample(scene: &Scene, settings: &RenderSettings, width: u32, height: u32) -> u32 {
-    let t = &settings.transmittance;
-    let taps = t.method == TransmittanceMethod::Diffusion && t.lateral_taps > 0;
+    let diffusion = settings.transmittance.method == TransmittanceMethod::Diffusion;
     // The bounce is gathered on the same map (passes::bounce): it too changes over
     // millimetres.
-    if !(taps || settings.bounce.enabled()) || settings.sss.method == SssMethod::Texture {
+    if !(diffusion || settings.bounce.enabled()) || settings.sss.method == SssMethod::Texture {
         return 1;
     }
     let pixel_mm = skin_pixel_mm(scene, width, height)
@@ -535,9 +547,11 @@ mod tests {
         paper.bounce = crate::settings::BounceSettings::OFF;
         let mut no_taps = s.clone();
         no_taps.transmittance.lateral_taps = 0;
+        // `diffusion` without lateral taps still evaluates its chords on the map.
+        assert_eq!(downsample(&scene, &no_taps, 512, 512), 6);
         let mut texture = s.clone();
         texture.sss.method = SssMethod::Texture;
-        for settings in [paper, no_taps, texture] {
+        for settings in [paper, texture] {
             assert_eq!(downsample(&scene, &settings, 512, 512), 1);
         }
         let mut away = scene.clone();
@@ -612,8 +626,14 @@ mod tests {
             (0, None, 0)
         );
         assert!(!p.map.compute);
+        // Without lateral taps the map still holds the chords' light.
+        let mut no_taps = with_bounce.clone();
+        no_taps.transmittance.lateral_taps = 0;
+        let p = plan(&scene, &no_taps);
+        assert!(p.map_holds_transmitted);
+        assert_eq!(p.lighting.lateral, lateral::MAP);
+        assert_eq!(p.taps_objects_lateral, lateral::NONE);
         for off in [
-            |s: &mut RenderSettings| s.transmittance.lateral_taps = 0,
             |s: &mut RenderSettings| s.transmitted_map.texel_mm = 0.0,
             |s: &mut RenderSettings| s.transmittance.method = TransmittanceMethod::Paper,
         ] {

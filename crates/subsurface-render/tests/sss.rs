@@ -147,13 +147,13 @@ fn workgroup_fetch_past_the_apron_and_without_storage_matches_oracle() {
             oracle::separable(&input, &table, &params(&config))
         }
         .unwrap();
-        for storage in [true, false] {
-            let gpu = run_gpu_on(&ctx, &input, &config, &table, storage);
+        // Packing as the first pass loads (GPUs) or in a pack step first (CPU adapters).
+        for (storage, on_load) in [(true, true), (false, true), (true, false), (false, false)] {
+            let gpu = run_gpu_packing(&ctx, &input, &config, &table, storage, on_load);
             let d = max_abs_diff(&gpu, &cpu);
-            eprintln!(
-                "workgroup, jitter {jitter}, storage {storage}: max |GPU - oracle| = {d:.2e}"
-            );
-            assert!(d < TOL_SEPARABLE, "jitter {jitter}, storage {storage}: {d}");
+            let case = format!("jitter {jitter}, storage {storage}, pack on load {on_load}");
+            eprintln!("workgroup, {case}: max |GPU - oracle| = {d:.2e}");
+            assert!(d < TOL_SEPARABLE, "{case}: {d}");
             assert!(max_abs_diff(&gpu, &input.color) > 0.01, "did not blur");
         }
     }

@@ -25,16 +25,16 @@ pub(super) struct MemoryBound {
     pub(super) over_bound: Option<f64>,
 }
 
-/// The byte models of a `w` x `h` frame's modelled passes (screen-space SSS with `sss`, the
-/// baseline copy) with their measured times (`[sss, copy]` ms) and, given a bandwidth, the
-/// ratio to the memory bound.
+/// The byte models of a `w` x `h` frame's modelled passes (screen-space SSS with `sss` and
+/// whether its workgroup fetch packs on load, the baseline copy) with their measured times
+/// (`[sss, copy]` ms) and, given a bandwidth, the ratio to the memory bound.
 pub(super) fn traffic_of(
     (w, h): (u32, u32),
-    sss: &subsurface_render::SssSettings,
+    (sss, pack_on_load): (&subsurface_render::SssSettings, bool),
     [sss_ms, copy_ms]: [f64; 2],
     gbps: Option<f64>,
 ) -> Vec<Traffic> {
-    let models = traffic::sss_traffic(sss, w, h)
+    let models = traffic::sss_traffic(sss, pack_on_load, w, h)
         .into_iter()
         .map(|m| (m, sss_ms))
         .chain([(traffic::copy_traffic(w, h), copy_ms)]);

@@ -124,16 +124,27 @@ fn plain_step(read: u64, write: u64) -> PerPixel {
 
 /// The screen-space SSS passes with `settings` at `width` x `height` (the timed `sss`
 /// passes; the copy of the input that Hable's pass starts from is outside them), or None for
-/// methods that are not screen space.
-pub fn sss_traffic(settings: &SssSettings, width: u32, height: u32) -> Option<PassTraffic> {
+/// methods that are not screen space. `pack_on_load`: the workgroup fetch's first pass packs
+/// its texels itself (`SssPass::pack_on_load`, the choice on GPUs) rather than after a pack
+/// step.
+pub fn sss_traffic(
+    settings: &SssSettings,
+    pack_on_load: bool,
+    width: u32,
+    height: u32,
+) -> Option<PassTraffic> {
     let colour = texel_bytes(sss::FORMAT);
     let mask = texel_bytes(lighting::SSS_FORMAT);
     let t = texels(settings.fetch);
     let packed = settings.fetch != SssFetch::Direct;
     // The packed fetch starts with the pack step: colour, depth and SSS data in, one packed
-    // texel out.
+    // texel out. The workgroup fetch's separable passes have none: the first packs its
+    // texels as it loads them.
     let input = texels(SssFetch::Direct).tap;
-    let pack = if packed {
+    let packs_as_it_loads = pack_on_load
+        && settings.fetch == SssFetch::Workgroup
+        && settings.method == SssMethod::Separable;
+    let pack = if packed && !packs_as_it_loads {
         plain_step(input, t.tap)
     } else {
         PerPixel::default()
@@ -149,7 +160,10 @@ pub fn sss_traffic(settings: &SssSettings, width: u32, height: u32) -> Option<Pa
                 // Each workgroup loads its stretch and both aprons once (taps past the apron,
                 // which read the texture, are left out).
                 let span = u64::from(sss::WORKGROUP_SPAN) / u64::from(sss::WORKGROUP_TILE);
-                h.read_taps = t.tap * span;
+                if packs_as_it_loads {
+                    h.read = input;
+                }
+                h.read_taps = h.read * span;
                 v.read_taps = t.tap * span;
             }
             pack + h + v
@@ -209,7 +223,7 @@ mod tests {
     #[test]
     fn byte_model_by_hand() {
         let px = 100 * 10;
-        let sep = sss_traffic(&settings(SssMethod::Separable, 17), 100, 10).unwrap();
+        let sep = sss_traffic(&settings(SssMethod::Separable, 17), false, 100, 10).unwrap();
         assert_eq!(sep.read_bytes, 2 * px * 20);
         assert_eq!(sep.write_bytes, 2 * px * 8);
         // Per pass: the centre and 16 taps of 2 texels.
@@ -217,27 +231,27 @@ mod tests {
         // Jitter moves the taps, not their number.
         let mut jittered = settings(SssMethod::Separable, 7);
         jittered.jitter = true;
-        let j = sss_traffic(&jittered, 100, 10).unwrap();
+        let j = sss_traffic(&jittered, false, 100, 10).unwrap();
         assert_eq!(j.read_bytes_per_tap, 2 * px * 20 * 13);
         assert_eq!(j.bytes(), sep.bytes());
 
-        let hable = sss_traffic(&settings(SssMethod::Hable13, 17), 100, 10).unwrap();
+        let hable = sss_traffic(&settings(SssMethod::Hable13, 17), false, 100, 10).unwrap();
         assert_eq!((hable.read_bytes, hable.write_bytes), (px * 20, px * 8));
         assert_eq!(hable.read_bytes_per_tap, px * 20 * 49);
 
         // Start (16 in, 8 out), five Gaussians of H (20, 8) and V (20 + 8 blend, 8 + 8),
         // resolve (16, 8).
-        let g = sss_traffic(&settings(SssMethod::Gaussian6, 17), 100, 10).unwrap();
+        let g = sss_traffic(&settings(SssMethod::Gaussian6, 17), false, 100, 10).unwrap();
         assert_eq!(g.read_bytes, px * (16 + 5 * 48 + 16));
         assert_eq!(g.write_bytes, px * (8 + 5 * 24 + 8));
         assert_eq!(g.read_bytes_per_tap, px * (16 + 5 * (2 * 20 * 13 + 8) + 16));
         let mut three = settings(SssMethod::Gaussian6, 17);
         three.gaussians = [true, false, true, false, true];
-        let g3 = sss_traffic(&three, 100, 10).unwrap();
+        let g3 = sss_traffic(&three, false, 100, 10).unwrap();
         assert_eq!(g3.read_bytes, px * (16 + 3 * 48 + 16));
 
         for m in [SssMethod::None, SssMethod::Texture] {
-            assert_eq!(sss_traffic(&settings(m, 17), 100, 10), None);
+            assert_eq!(sss_traffic(&settings(m, 17), false, 100, 10), None);
         }
         // Packed: the pack step (20 in, 16 out), then 16 B per texel of a tap and between the
         // steps, the last step writing the 8 B colour.
@@ -245,25 +259,31 @@ mod tests {
             fetch: SssFetch::Packed,
             ..settings(m, 17)
         };
-        let sep = sss_traffic(&packed(SssMethod::Separable), 100, 10).unwrap();
+        let sep = sss_traffic(&packed(SssMethod::Separable), false, 100, 10).unwrap();
         assert_eq!(sep.read_bytes, px * (20 + 16 + 16));
         assert_eq!(sep.write_bytes, px * (16 + 16 + 8));
         assert_eq!(sep.read_bytes_per_tap, px * (20 + 2 * 16 * 33));
-        let hable = sss_traffic(&packed(SssMethod::Hable13), 100, 10).unwrap();
+        let hable = sss_traffic(&packed(SssMethod::Hable13), false, 100, 10).unwrap();
         assert_eq!((hable.read_bytes, hable.write_bytes), (px * 36, px * 24));
         assert_eq!(hable.read_bytes_per_tap, px * (20 + 16 * 49));
         // Pack (20, 16), start (16, 8), five Gaussians of H (16, 16) and V (16 + 8 blend,
         // 16 + 8), resolve (16 + 8, 8).
-        let g = sss_traffic(&packed(SssMethod::Gaussian6), 100, 10).unwrap();
+        let g = sss_traffic(&packed(SssMethod::Gaussian6), false, 100, 10).unwrap();
         assert_eq!(g.read_bytes, px * (20 + 16 + 5 * 40 + 24));
-        // Workgroup memory: 256 texels loaded per 128 pixels of a line, per pass.
+        // Workgroup memory: 256 texels loaded per 128 pixels of a line, per pass; the first
+        // pass packs the inputs (20 B) as it loads them, so no pack step.
         let w = SssSettings {
             fetch: SssFetch::Workgroup,
             ..settings(SssMethod::Separable, 17)
         };
-        let w = sss_traffic(&w, 100, 10).unwrap();
-        assert_eq!(w.bytes(), sep.bytes());
-        assert_eq!(w.read_bytes_per_tap, px * (20 + 2 * 16 * 2));
+        let on_load = sss_traffic(&w, true, 100, 10).unwrap();
+        assert_eq!(on_load.read_bytes, px * (20 + 16));
+        assert_eq!(on_load.write_bytes, px * (16 + 8));
+        assert_eq!(on_load.read_bytes_per_tap, px * (20 * 2 + 16 * 2));
+        // With a pack step first (on CPU adapters), as the packed fetch moves.
+        let stepped = sss_traffic(&w, false, 100, 10).unwrap();
+        assert_eq!(stepped.bytes(), sep.bytes());
+        assert_eq!(stepped.read_bytes_per_tap, px * (20 + 2 * 16 * 2));
         assert_eq!(g.write_bytes, px * (16 + 8 + 5 * 40 + 8));
 
         let copy = copy_traffic(1280, 720);

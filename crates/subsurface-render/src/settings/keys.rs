@@ -243,9 +243,7 @@ impl RenderSettings {
             "sss.min_sigma_px" | "sss.gaussians" => sss == SssMethod::Gaussian6,
             k if k.starts_with("sss.texture_") => sss == SssMethod::Texture,
             "transmittance.lateral_taps" => t == TransmittanceMethod::Diffusion,
-            k if k.starts_with("transmitted_map.") => {
-                t == TransmittanceMethod::Diffusion && self.transmittance.lateral_taps > 0
-            }
+            k if k.starts_with("transmitted_map.") => t == TransmittanceMethod::Diffusion,
             "transmittance.ballistic" | "transmittance.single_scattering" => {
                 t == TransmittanceMethod::Diffusion
             }

@@ -35,9 +35,8 @@ impl MapEvaluation {
     }
 }
 
-/// The `[render.transmitted_map]` table. The map exists when `diffusion` runs lateral taps
-/// (`transmittance.lateral_taps > 0`) on skin large enough on screen; the bounce then rides
-/// on it as one more layer.
+/// The `[render.transmitted_map]` table. The map exists when `diffusion` runs on skin large
+/// enough on screen; the bounce then rides on it as one more layer.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TransmittedMapSettings {

@@ -86,6 +86,26 @@ pub fn run_gpu_on(
     run_gpu_at(ctx, input, config, table, storage, FOCAL)
 }
 
+/// As `run_gpu_on`, with the workgroup fetch's first pass packing as it loads (`true`, the
+/// choice on GPUs) or after a pack step (`false`, on CPU adapters) whatever the adapter.
+pub fn run_gpu_packing(
+    ctx: &GpuContext,
+    input: &ScreenInput,
+    config: &SssSettings,
+    table: &[ScreenKernels],
+    storage: bool,
+    pack_on_load: bool,
+) -> Vec<[f32; 3]> {
+    run_gpu_full(
+        ctx,
+        input,
+        config,
+        table,
+        (storage, Some(pack_on_load)),
+        FOCAL,
+    )
+}
+
 /// As `run_gpu_on`, for a camera of focal length `focal_px` (pixels).
 pub fn run_gpu_at(
     ctx: &GpuContext,
@@ -93,6 +113,17 @@ pub fn run_gpu_at(
     config: &SssSettings,
     table: &[ScreenKernels],
     storage: bool,
+    focal_px: f32,
+) -> Vec<[f32; 3]> {
+    run_gpu_full(ctx, input, config, table, (storage, None), focal_px)
+}
+
+fn run_gpu_full(
+    ctx: &GpuContext,
+    input: &ScreenInput,
+    config: &SssSettings,
+    table: &[ScreenKernels],
+    (storage, pack_on_load): (bool, Option<bool>),
     focal_px: f32,
 ) -> Vec<[f32; 3]> {
     let (w, h) = (input.width, input.height);
@@ -140,6 +171,9 @@ pub fn run_gpu_at(
     );
     let view = |t: &wgpu::Texture| t.create_view(&Default::default());
     let mut pass = SssPass::new(&ctx.device, config, table).unwrap();
+    if let Some(on) = pack_on_load {
+        pass.set_pack_on_load(on);
+    }
     pass.resize(
         &ctx.device,
         &SssInputs {

@@ -330,7 +330,7 @@ impl LightingPass {
         let key = self.pipelines[self.current].0;
         self.taps = (key.lateral == lateral::MAP && plan.taps_objects.contains(&true)).then(|| {
             let taps = LightingVariant {
-                lateral: lateral::TAPS,
+                lateral: plan.taps_objects_lateral,
                 ..key
             };
             self.pipeline_index(device, taps)

@@ -9,9 +9,12 @@
 //! the same inputs.
 //!
 //! Each texel a tap touches needs colour, depth, strength, scale and profile row. With
-//! `fetch = packed` (the default) a pack step first writes them into one Rgba32Uint texel per
-//! pixel and the 1-D passes hand that layout on, so a tap loads one texel per footprint texel
-//! instead of three; `fetch = direct` reads the three textures (no pack step or extra memory).
+//! `fetch = packed` a pack step first writes them into one Rgba32Uint texel per pixel and the
+//! 1-D passes hand that layout on, so a tap loads one texel per footprint texel instead of
+//! three; `fetch = workgroup` (the default) runs separable's passes as compute shaders over
+//! lines held in workgroup memory, the first packing its texels as it loads them, so no pack
+//! step runs (on the H200 that step alone cost five times the two passes); `fetch = direct`
+//! reads the three textures (no pack step or extra memory).
 //! Both reproduce the oracle (the packed texel keeps colour, strength and scale as f16, which
 //! is what the lighting pass's Rgba16Float targets hold anyway).
 //!
@@ -45,7 +48,8 @@ mod workgroup;
 
 use pipelines::{PipelineKey, Pipelines, Stage};
 
-pub use workgroup::{LINE_SPAN as WORKGROUP_SPAN, LINE_TILE as WORKGROUP_TILE};
+use workgroup::Dispatch;
+pub use workgroup::{LINE_SPAN as WORKGROUP_SPAN, LINE_TILE as WORKGROUP_TILE, pack_on_load_suits};
 
 /// The passes with the direct fetch (three textures per texel of a tap).
 pub const SHADER: &str = concat!(
@@ -118,8 +122,8 @@ struct Step {
     bind_group: wgpu::BindGroup,
     target: usize,
     accum: bool,
-    /// A compute step (the workgroup fetch's 1-D passes): along rows (true) or columns.
-    dispatch: Option<bool>,
+    /// A compute step (the workgroup fetch's 1-D passes).
+    dispatch: Option<Dispatch>,
 }
 
 struct Bound {
@@ -163,6 +167,7 @@ pub struct SssPass {
     /// The bound inputs' size.
     size: [u32; 2],
     bound: Option<Bound>,
+    pack_on_load: bool,
 }
 
 impl SssPass {
@@ -200,9 +205,23 @@ impl SssPass {
             region: None,
             size: [0, 0],
             bound: None,
+            pack_on_load: pack_on_load_suits(device),
         };
         pass.set_settings(device, settings, profiles)?;
         Ok(pass)
+    }
+
+    /// Whether the workgroup fetch's first compute pass packs its texels as it loads them
+    /// (true) or a pack step runs before it (false); the image is the same. The default
+    /// depends on the adapter: see [`pack_on_load_suits`].
+    pub fn pack_on_load(&self) -> bool {
+        self.pack_on_load
+    }
+
+    /// Overrides [`Self::pack_on_load`]'s choice; takes effect at the next `resize`.
+    pub fn set_pack_on_load(&mut self, on: bool) {
+        self.pack_on_load = on;
+        self.bound = None;
     }
 
     /// The settings the pass was built for.
@@ -434,10 +453,12 @@ impl SssPass {
                 .expect("prepared for compute")
         };
         let compute_step = |stage, uniform: usize, input, out_packed, out_color, horizontal| {
+            let from_inputs = matches!(input, workgroup::LineInput::Inputs { .. });
             let desc = workgroup::BindGroupDesc {
                 uniform: &self.uniforms[uniform],
                 table: &self.table,
                 input,
+                dummies: &parts().dummies,
                 out_packed,
                 out_color,
             };
@@ -447,7 +468,10 @@ impl SssPass {
                 bind_group: workgroup::bind_group(device, &parts().layout, &desc),
                 target: 0,
                 accum: false,
-                dispatch: Some(horizontal),
+                dispatch: Some(Dispatch {
+                    horizontal,
+                    from_inputs,
+                }),
             }
         };
         // Target indices: 0 = the diffuse input (written in place), then intermediates; an
@@ -461,7 +485,8 @@ impl SssPass {
         // direct fetch reads the diffuse texture itself.
         let mut input = diffuse_view.clone();
         let mut packed_input = None;
-        if packed && self.settings.method.is_screen_space() {
+        let pack_on_load = compute && self.pack_on_load;
+        if packed && self.settings.method.is_screen_space() && !pack_on_load {
             let t = make_target("sss packed input", PACKED_FORMAT);
             input = view(&t);
             packed_input = Some(input.clone());
@@ -479,14 +504,24 @@ impl SssPass {
                 };
                 if compute {
                     let color = &parts().dummies.color;
-                    steps.push(compute_step(stage, 0, &input, &tmp_view, color, true));
+                    let input = if pack_on_load {
+                        workgroup::LineInput::Inputs {
+                            color: &diffuse_view,
+                            depth: inputs.depth,
+                            sss: inputs.sss,
+                        }
+                    } else {
+                        workgroup::LineInput::Packed(&input)
+                    };
+                    steps.push(compute_step(stage, 0, input, &tmp_view, color, true));
                 } else {
                     steps.push(step(stage, packed, bg(0, &input, &self.dummy), 1, false));
                 }
                 let storage = wgpu::TextureUsages::STORAGE_BINDING;
                 if compute && inputs.diffuse.usage().contains(storage) {
                     let packed_dummy = &parts().dummies.packed;
-                    let v = compute_step(stage, 1, &tmp_view, packed_dummy, &diffuse_view, false);
+                    let tmp = workgroup::LineInput::Packed(&tmp_view);
+                    let v = compute_step(stage, 1, tmp, packed_dummy, &diffuse_view, false);
                     steps.push(v);
                 } else {
                     steps.push(step(stage, false, bg(1, &tmp_view, &self.dummy), 0, false));
@@ -561,8 +596,9 @@ impl SssPass {
             targets.push(packed_input);
         }
         for s in &steps {
-            if s.dispatch.is_some() {
-                self.pipelines.ensure_compute(device, s.key.stage);
+            if let Some(d) = s.dispatch {
+                self.pipelines
+                    .ensure_compute(device, s.key.stage, d.from_inputs);
             } else {
                 self.pipelines.ensure_render(device, s.key);
             }
@@ -619,14 +655,14 @@ impl SssPass {
         }
         for s in &bound.steps {
             let timer = TimedPass::begin(profiler, "sss", encoder);
-            if let Some(horizontal) = s.dispatch {
-                let [x, y] = workgroup::dispatch(w, h, horizontal);
+            if let Some(d) = s.dispatch {
+                let [x, y] = workgroup::dispatch(w, h, d.horizontal);
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("sss"),
                         timestamp_writes: timer.compute_writes(),
                     });
-                    pass.set_pipeline(self.pipelines.compute(s.key.stage));
+                    pass.set_pipeline(self.pipelines.compute(s.key.stage, d.from_inputs));
                     pass.set_bind_group(0, &s.bind_group, &[]);
                     pass.dispatch_workgroups(x, y, 1);
                 }

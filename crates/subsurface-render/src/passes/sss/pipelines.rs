@@ -67,8 +67,8 @@ pub struct ComputeParts {
     /// Group 0 of the workgroup fetch's compute steps.
     pub layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// The compute pipelines, by stage.
-    pipelines: Vec<(Stage, wgpu::ComputePipeline)>,
+    /// The compute pipelines, by stage and whether they pack the inputs as they load them.
+    pipelines: Vec<((Stage, bool), wgpu::ComputePipeline)>,
     pub dummies: workgroup::Dummies,
 }
 
@@ -160,11 +160,13 @@ impl Pipelines {
             .clone()
     }
 
-    /// Makes the compute pipeline of `stage` (separable, fixed or jittered) unless made before.
-    pub fn ensure_compute(&mut self, device: &wgpu::Device, stage: Stage) {
+    /// Makes the compute pipeline of `stage` (separable, fixed or jittered), reading the
+    /// inputs or the packed texels, unless made before.
+    pub fn ensure_compute(&mut self, device: &wgpu::Device, stage: Stage, from_inputs: bool) {
         self.prepare_compute(device);
+        let key = (stage, from_inputs);
         let made = self.compute.as_ref().map(|c| &c.pipelines);
-        if made.is_some_and(|p| p.iter().any(|(s, _)| *s == stage)) {
+        if made.is_some_and(|p| p.iter().any(|(k, _)| *k == key)) {
             return;
         }
         let module = self.module(device, SssFetch::Workgroup);
@@ -173,8 +175,9 @@ impl Pipelines {
             _ => "cs_separable",
         };
         let parts = self.compute.as_mut().expect("prepared above");
-        let pipeline = workgroup::pipeline(device, &module, &parts.pipeline_layout, entry);
-        parts.pipelines.push((stage, pipeline));
+        let layout = &parts.pipeline_layout;
+        let pipeline = workgroup::pipeline(device, &module, layout, entry, from_inputs);
+        parts.pipelines.push((key, pipeline));
     }
 
     pub fn render(&self, key: PipelineKey) -> &wgpu::RenderPipeline {
@@ -182,9 +185,10 @@ impl Pipelines {
         &found.expect("resize makes every step's pipeline").1
     }
 
-    pub fn compute(&self, stage: Stage) -> &wgpu::ComputePipeline {
+    pub fn compute(&self, stage: Stage, from_inputs: bool) -> &wgpu::ComputePipeline {
         let parts = self.compute.as_ref();
-        let found = parts.and_then(|c| c.pipelines.iter().find(|(s, _)| *s == stage));
+        let key = (stage, from_inputs);
+        let found = parts.and_then(|c| c.pipelines.iter().find(|(k, _)| *k == key));
         &found.expect("resize makes every step's pipeline").1
     }
 }

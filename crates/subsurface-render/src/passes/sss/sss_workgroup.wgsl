@@ -4,6 +4,12 @@
 // into workgroup memory, and every tap inside it reads from there instead of the texture. Taps
 // past the apron (wide kernels seen up close) fall back to the texture. The result is the
 // fragment passes' to the bit: the same taps, corrections and bilinear weights.
+//
+// The horizontal pass packs its texels itself as it loads them (FROM_INPUTS): a separate pack
+// step would be one more full-screen pass, and on GPUs whose raster units are few for their
+// memory (the H200) a full-screen fragment pass costs several times what a compute pass over
+// the same pixels does.
+override FROM_INPUTS: bool = false;
 
 const LINE_TILE: u32 = 128u;
 const LINE_APRON: i32 = 64;
@@ -28,12 +34,22 @@ fn line_texel(along: i32, line: Line) -> vec2<i32> {
     return vec2<i32>(i32(line.across), along);
 }
 
+// The packed texel (sss_packed.wgsl) at `texel`: packed here from the three inputs, exactly as
+// fs_pack packs it, or read from the previous pass's packed output.
+fn input_texel(texel: vec2<i32>) -> vec4<u32> {
+    if (FROM_INPUTS) {
+        let c = input_centre(texel);
+        return pack(c.color, c);
+    }
+    return textureLoad(packed_tex, texel, 0);
+}
+
 fn line_fetch(along: i32, line: Line) -> vec4<u32> {
     let k = along - (line.origin - LINE_APRON);
     if (k >= 0 && k < i32(LINE_SPAN)) {
         return line_texels[k];
     }
-    return textureLoad(packed_tex, line_texel(along, line), 0);
+    return input_texel(line_texel(along, line));
 }
 
 // `tap` (sss.wgsl) along the line: q is the tap's position along it, in pixels.
@@ -52,7 +68,11 @@ fn line_tap(q: f32, line: Line, c: Centre) -> vec3<f32> {
 // Loads the workgroup's stretch and its apron (clamped at the line's ends, as `tap` clamps)
 // into workgroup memory.
 fn load_line(group: vec3<u32>, index: u32) -> Line {
-    let size = extent();
+    var size = extent();
+    if (FROM_INPUTS) {
+        // packed_tex is a stand-in here.
+        size = vec2<i32>(textureDimensions(color_tex));
+    }
     var line: Line;
     line.last = select(size.y, size.x, u.direction.x > 0.5) - 1;
     if (u.direction.x > 0.5) {
@@ -64,7 +84,7 @@ fn load_line(group: vec3<u32>, index: u32) -> Line {
     }
     for (var k = index; k < LINE_SPAN; k += LINE_TILE) {
         let along = clamp(line.origin - LINE_APRON + i32(k), 0, line.last);
-        line_texels[k] = textureLoad(packed_tex, line_texel(along, line), 0);
+        line_texels[k] = input_texel(line_texel(along, line));
     }
     workgroupBarrier();
     return line;
