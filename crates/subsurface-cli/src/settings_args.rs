@@ -46,9 +46,9 @@ pub struct SettingsArgs {
     jitter: bool,
     /// Screen space: how a tap fetches its texels, packed (a pack step first, then one
     /// Rgba32Uint texel per texel), workgroup (separable's passes as compute shaders that read
-    /// each line once into workgroup memory, the first packing as it loads) or direct (colour, depth and
-    /// SSS textures per texel); the same image at a different cost [default: render.sss.fetch,
-    /// workgroup].
+    /// each line once into workgroup memory, the first packing as it loads) or direct (colour,
+    /// depth and SSS textures per texel); the same image at a different cost [default:
+    /// render.sss.fetch, workgroup].
     #[arg(long, value_name = "FETCH")]
     sss_fetch: Option<SssFetch>,
     /// Let the blur cross depth edges (render.sss.follow_surface = false).

@@ -91,8 +91,9 @@ pub struct BenchArgs {
     profiles: Vec<u32>,
     /// How the screen-space passes fetch a tap's texels, comma-separated: packed (one
     /// Rgba32Uint texel per texel, after a pack step), workgroup (separable's passes as
-    /// compute shaders reading workgroup memory, the first packing as it loads) and/or direct (colour, depth and SSS
-    /// textures per texel); the same image, so `packed,workgroup,direct` compares their cost.
+    /// compute shaders reading workgroup memory, the first packing as it loads) and/or direct
+    /// (colour, depth and SSS textures per texel); the same image, so `packed,workgroup,direct`
+    /// compares their cost.
     /// Short for --vary render.sss.fetch=.. [default: the scene's].
     #[arg(long, value_delimiter = ',', value_name = "FETCH,..")]
     fetch: Vec<SssFetch>,
@@ -494,8 +495,7 @@ fn describe(
     run.lights = plan.lights;
     run.varied = plan.values.iter().cloned().collect::<BTreeMap<_, _>>();
     let times = [sss_ms(&run.passes), run.copy_ms];
-    let pack_on_load = subsurface_render::passes::sss::pack_on_load_suits(&ctx.device);
-    let sss = (&s.sss, pack_on_load);
+    let sss = (&s.sss, renderer.sss_pass().pack_on_load());
     run.traffic = traffic_of((run.width, run.height), sss, times, args.bandwidth);
     if let (Some(fixed), SssMethod::Separable) = (args.flip_vs, s.sss.method) {
         let ours = renderer.render()?.image;

@@ -602,6 +602,12 @@ impl Renderer {
     pub fn profile_table(&self) -> &ProfileTable {
         &self.profiles
     }
+
+    /// The screen-space SSS pass, as this frame runs it (e.g. whether its workgroup fetch packs
+    /// on load, [`SssPass::pack_on_load`]).
+    pub fn sss_pass(&self) -> &SssPass {
+        &self.sss
+    }
 }
 
 fn rgba(v: Vec<f32>) -> Vec<[f32; 4]> {
