@@ -220,11 +220,14 @@ def main():
               "cost_scenes": labels, "error_scenes": names, "configs": []}
     measured = {}
     if a.costs:
-        with open(a.costs) as f:
-            given = json.load(f)
-        measured = {c["name"]: c["cost"] for c in given["configs"]}
-        for k in ("adapter", "size", "frames", "rounds", "cost_scenes"):
-            report[k] = given[k]
+        try:
+            with open(a.costs) as f:
+                given = json.load(f)
+            measured = {c["name"]: c["cost"] for c in given["configs"]}
+            for k in ("adapter", "size", "frames", "rounds", "cost_scenes"):
+                report[k] = given[k]
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            sys.exit(f"error: --costs {a.costs}: not a report written by --no-error ({e})")
         labels = given["cost_scenes"]
     configs = list(CONFIGS)
     for c in a.config:
