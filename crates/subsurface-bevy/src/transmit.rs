@@ -179,18 +179,7 @@ impl Pipelines {
         let add_module = module("subsurface add unscattered", ADD_WGSL);
         // Colour added, destination alpha kept (it is 1 after the blur, and the specular
         // twin's blending relies on it).
-        let add_blend = wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::Zero,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-        };
+        let add_blend = fullscreen::ADD;
         let add = fullscreen::pipeline(
             device,
             &add_module,

@@ -30,8 +30,8 @@ pub use renderer::{Frame, RenderOptions, Renderer};
 pub use scene::Scene;
 pub use settings::{
     BounceSettings, DEFAULT_MAP_TEXEL_MM, MAX_MAP_DOWNSAMPLE, MAX_TEXEL_FACTOR, MapEvaluation,
-    RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, SssSettings, TransmittanceMethod,
-    TransmittanceSettings, TransmittedMapSettings,
+    OutlineChords, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, SssSettings,
+    TransmittanceMethod, TransmittanceSettings, TransmittedMapSettings,
 };
 pub use timing::PassTiming;
 
@@ -91,9 +91,12 @@ mod shader_tests {
             // Each term alone and none: every `has_term` branch compiles either way.
             let terms = [7, 0, 1, 2, 4][usize::from(code as u8) % 5];
             constants.insert("DIFFUSION_TERMS".into(), f64::from(terms));
+            // The chords at outlines inline or left to the outline pass, alternately.
+            constants.insert("OUTLINE_PASS".into(), f64::from(source % 2));
             // The transmitted map's compute evaluation (transmitted_map.wgsl) is specialized alike.
             let entries = [
                 (naga::ShaderStage::Fragment, "fs_main"),
+                (naga::ShaderStage::Fragment, "fs_outline"),
                 (naga::ShaderStage::Fragment, "fs_transmitted"),
                 (naga::ShaderStage::Fragment, "fs_bounce"),
                 (naga::ShaderStage::Fragment, "fs_surface"),

@@ -9,7 +9,8 @@
 
 use subsurface_render::settings::{Quality, value_text};
 use subsurface_render::{
-    MapEvaluation, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod, TransmittanceMethod,
+    MapEvaluation, OutlineChords, RenderSettings, SETTINGS, SettingDoc, SssFetch, SssMethod,
+    TransmittanceMethod,
 };
 
 use super::state::Which;
@@ -150,6 +151,7 @@ pub fn choices(key: &str) -> Option<Vec<&'static str>> {
         "sss.fetch" => names(&SssFetch::ALL, SssFetch::name),
         "transmittance.method" => names(&TransmittanceMethod::ALL, TransmittanceMethod::name),
         "transmitted_map.pass" => names(&MapEvaluation::ALL, MapEvaluation::name),
+        "transmitted_map.outlines" => names(&OutlineChords::ALL, OutlineChords::name),
         "quality" => names(&Quality::ALL, Quality::name),
         _ => return None,
     })

@@ -290,6 +290,7 @@ mod tests {
         d.render.transmitted_map = subsurface_render::TransmittedMapSettings {
             texel_mm: 3.5,
             pass: subsurface_render::MapEvaluation::Fragment,
+            outlines: subsurface_render::OutlineChords::Pass,
         };
         d.render.exposure_ev = 1.25;
         d.render.width = 333;

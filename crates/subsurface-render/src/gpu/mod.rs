@@ -90,7 +90,10 @@ impl GpuContext {
         let info = adapter.get_info();
         // Timestamp queries give the per-pass GPU times that `render` and `bench` report; an
         // adapter without them still renders, it just reports no GPU times.
-        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        // 32-bit depth with a stencil keeps the lighting pass's z-buffer as precise as the
+        // others where the adapter has it (`lighting::zbuffer_format`).
+        let required_features = adapter.features()
+            & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::DEPTH32FLOAT_STENCIL8);
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("subsurface"),

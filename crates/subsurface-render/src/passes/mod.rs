@@ -13,6 +13,7 @@ macro_rules! lighting_shader {
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/lighting/lighting.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/shadow_lookup.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/transmittance.wgsl")),
+            include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/map_read.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/bounce.wgsl")),
             $($extra),*
         )
@@ -43,6 +44,7 @@ pub const ALL_SHADERS: &[(&str, &str)] = &[
     ("shadow.wgsl", shadow::SHADER),
     ("bounce_build.wgsl", bounce::SHADER),
     ("lighting.wgsl", lighting::SHADER),
+    ("lighting/outline_mark.wgsl", lighting::OUTLINE_MARK_SHADER),
     ("tonemap.wgsl", tonemap::SHADER),
     ("sss.wgsl + sss_direct.wgsl", sss::SHADER),
     ("sss.wgsl + sss_packed.wgsl", sss::SHADER_PACKED),

@@ -11,6 +11,9 @@ pub const TRANSMITTANCE_METHOD: &str = "TRANSMITTANCE_METHOD";
 /// (`frame_plan::LightingVariant::lateral`; 2: the taps per pixel, 3: the taps' sum given by
 /// the texel's lanes in the transmitted map's compute evaluation).
 pub const LATERAL_SOURCE: &str = "LATERAL_SOURCE";
+/// Leaves each light's chord at the pixels the transmitted map misses to the outline pass
+/// (`frame_plan::LightingVariant::outline_pass`; lighting.wgsl, outline.wgsl).
+pub const OUTLINE_PASS: &str = "OUTLINE_PASS";
 /// Fixes where a pipeline's pixels take the bounce from (`frame_plan::LightingVariant::bounce`).
 pub const BOUNCE_SOURCE: &str = "BOUNCE_SOURCE";
 

@@ -32,9 +32,9 @@ pub fn draw_objects(
     }
 }
 
-/// The z-buffer of every depth-tested mesh pass; [`depth_buffer`] and [`MeshPipeline`] share it
-/// so that a pipeline always matches the buffer it is drawn with.
-const ZBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The z-buffer of every depth-tested mesh pass without a stencil; [`depth_buffer`] and
+/// [`MeshPipeline`] share it so that a pipeline always matches the buffer it is drawn with.
+pub const ZBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// A WGSL shader module; `label` names it in validation errors.
 pub fn wgsl_module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
@@ -205,6 +205,7 @@ pub fn depth_buffer(
     label: &str,
     width: u32,
     height: u32,
+    format: wgpu::TextureFormat,
 ) -> wgpu::TextureView {
     texture_2d(
         device,
@@ -212,7 +213,7 @@ pub fn depth_buffer(
         width,
         height,
         1,
-        ZBUFFER_FORMAT,
+        format,
         wgpu::TextureUsages::RENDER_ATTACHMENT,
     )
     .create_view(&Default::default())
@@ -255,7 +256,7 @@ pub fn additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
 }
 
 /// A pipeline that draws `GpuObject` meshes (vertex buffer [`VERTEX_LAYOUT`]) with one module's
-/// vertex and fragment entry points into unblended targets of `targets`' formats.
+/// vertex and fragment entry points into targets of `targets`' formats.
 pub struct MeshPipeline<'a> {
     /// Names the pipeline in validation errors and captures.
     pub label: &'a str,
@@ -273,8 +274,13 @@ pub struct MeshPipeline<'a> {
     pub cull_mode: Option<wgpu::Face>,
     /// How the pipeline uses its z-buffer.
     pub depth: DepthTest,
+    /// The z-buffer's format with a stencil and the pipeline's stencil test; `None`:
+    /// [`ZBUFFER_FORMAT`], no stencil.
+    pub stencil: Option<(wgpu::TextureFormat, wgpu::StencilState)>,
     /// Values of the fragment stage's pipeline-overridable constants (WGSL `override`).
     pub constants: &'a [(&'a str, f64)],
+    /// How every target blends what the fragment stage writes; `None` replaces it.
+    pub blend: Option<wgpu::BlendState>,
 }
 
 /// How a [`MeshPipeline`] uses its [`depth_buffer`].
@@ -293,7 +299,17 @@ pub enum DepthTest {
 impl MeshPipeline<'_> {
     /// Builds the render pipeline.
     pub fn create(&self, device: &wgpu::Device) -> wgpu::RenderPipeline {
-        let targets: Vec<_> = self.targets.iter().map(|&f| Some(f.into())).collect();
+        let targets: Vec<_> = self
+            .targets
+            .iter()
+            .map(|&format| {
+                Some(wgpu::ColorTargetState {
+                    format,
+                    blend: self.blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })
+            })
+            .collect();
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(self.label),
             layout: Some(self.layout),
@@ -307,7 +323,7 @@ impl MeshPipeline<'_> {
                 cull_mode: self.cull_mode,
                 ..Default::default()
             },
-            depth_stencil: depth_state(self.depth),
+            depth_stencil: depth_state(self.depth, self.stencil.clone()),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: self.module,
@@ -332,6 +348,7 @@ pub fn depth_prepass_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     vertex: &str,
+    format: wgpu::TextureFormat,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("depth prepass"),
@@ -343,7 +360,7 @@ pub fn depth_prepass_pipeline(
             buffers: &[Some(VERTEX_LAYOUT)],
         },
         primitive: Default::default(),
-        depth_stencil: depth_state(DepthTest::Nearest),
+        depth_stencil: depth_state(DepthTest::Nearest, Some((format, Default::default()))),
         multisample: Default::default(),
         fragment: None,
         multiview_mask: None,
@@ -351,18 +368,23 @@ pub fn depth_prepass_pipeline(
     })
 }
 
-/// The depth state of `depth` (None for [`DepthTest::Off`]).
-pub fn depth_state(depth: DepthTest) -> Option<wgpu::DepthStencilState> {
+/// The depth state of `depth` (None for [`DepthTest::Off`]) on a z-buffer of
+/// [`ZBUFFER_FORMAT`], or of `stencil`'s format with its stencil test.
+pub fn depth_state(
+    depth: DepthTest,
+    stencil: Option<(wgpu::TextureFormat, wgpu::StencilState)>,
+) -> Option<wgpu::DepthStencilState> {
     let (write, compare) = match depth {
         DepthTest::Off => return None,
         DepthTest::Nearest => (true, wgpu::CompareFunction::Less),
         DepthTest::Prepassed => (false, wgpu::CompareFunction::Equal),
     };
+    let (format, stencil) = stencil.unwrap_or((ZBUFFER_FORMAT, Default::default()));
     Some(wgpu::DepthStencilState {
-        format: ZBUFFER_FORMAT,
+        format,
         depth_write_enabled: Some(write),
         depth_compare: Some(compare),
-        stencil: Default::default(),
+        stencil,
         bias: Default::default(),
     })
 }
@@ -528,7 +550,9 @@ impl LayeredPass {
             // No culling: thickness needs the surface nearest the light whichever way it faces.
             cull_mode: None,
             depth: DepthTest::Nearest,
+            stencil: None,
             constants: &[],
+            blend: None,
         }
         .create(device);
         let size = atlas_size.max(1);
@@ -560,7 +584,10 @@ impl LayeredPass {
             Some(kept) => (0..layers.len() as u32)
                 .map(|i| layer_view(kept, i))
                 .collect(),
-            None => vec![depth_buffer(device, &depth_label, size, size); layers.len()],
+            None => {
+                let zbuffer = depth_buffer(device, &depth_label, size, size, ZBUFFER_FORMAT);
+                vec![zbuffer; layers.len()]
+            }
         };
         let layers = layers
             .iter()

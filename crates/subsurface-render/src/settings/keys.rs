@@ -50,6 +50,7 @@ pub const SETTINGS: &[SettingDoc] = &[
     doc("transmittance.single_scattering", "", "diffusion: light scattered once through thin parts"),
     doc("transmitted_map.texel_mm", "mm", "diffusion and bounce: map texel on the skin, 0..=50 (0: per pixel)"),
     doc("transmitted_map.pass", "", "diffusion and bounce: compute or fragment evaluation of the map"),
+    doc("transmitted_map.outlines", "", "diffusion: chords where the map misses, in the lighting pass or a pass (same image)"),
     doc("bounce.ring", "cells", "light between parts: cells read per level, 0..=8 (0: off)"),
     doc("bounce.cell_mm", "mm", "light between parts: finest cell width, 0.1..=50"),
 ];

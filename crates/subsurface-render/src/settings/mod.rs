@@ -15,7 +15,7 @@ pub use quality::Quality;
 pub use sss::{SssFetch, SssMethod, SssSettings};
 pub use transmittance::{TransmittanceMethod, TransmittanceSettings};
 pub use transmitted_map::{
-    DEFAULT_MAP_TEXEL_MM, MAX_MAP_DOWNSAMPLE, MAX_TEXEL_FACTOR, MapEvaluation,
+    DEFAULT_MAP_TEXEL_MM, MAX_MAP_DOWNSAMPLE, MAX_TEXEL_FACTOR, MapEvaluation, OutlineChords,
     TransmittedMapSettings, map_downsample,
 };
 
@@ -51,6 +51,7 @@ method_names!(
     SssFetch,
     TransmittanceMethod,
     MapEvaluation,
+    OutlineChords,
     Quality
 );
 

@@ -35,6 +35,44 @@ impl MapEvaluation {
     }
 }
 
+/// Where a frame that reads `diffusion` from the transmitted map runs each light's chord at the
+/// pixels the map has no texel of (outlines, depth edges). The same image either way (tests/
+/// transmittance.rs compares them); they differ in speed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OutlineChords {
+    /// `pass` on adapters whose shaders run both sides of every branch (CPU rasterisers such
+    /// as lavapipe), `lighting` on the others (docs/lab/performance.md, session 29).
+    #[default]
+    Auto,
+    /// In the lighting pass's shader, behind a branch only outline pixels take: one draw, but
+    /// the branch's code weighs on the shader everywhere (registers on a GPU; on a CPU
+    /// rasteriser, which masks rather than jumps, its whole cost at every pixel).
+    Lighting,
+    /// In a pass of their own after the lighting pass, over the skin's pixels, which leave at
+    /// once where the map holds their surface: a second draw of the skin, and a lighting
+    /// shader without the chords.
+    Pass,
+}
+
+impl OutlineChords {
+    /// Every choice.
+    pub const ALL: [OutlineChords; 3] = [
+        OutlineChords::Auto,
+        OutlineChords::Lighting,
+        OutlineChords::Pass,
+    ];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutlineChords::Auto => "auto",
+            OutlineChords::Lighting => "lighting",
+            OutlineChords::Pass => "pass",
+        }
+    }
+}
+
 /// The `[render.transmitted_map]` table. The map exists when `diffusion` runs on skin large
 /// enough on screen; the bounce then rides on it as one more layer.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -55,6 +93,9 @@ pub struct TransmittedMapSettings {
     /// Where the map is evaluated, `compute` (a compute shader on the texels' surfaces) or
     /// `fragment` (the map's raster pass); the same map.
     pub pass: MapEvaluation,
+    /// Where each light's chord runs at the pixels the map misses: `auto`, `lighting` (in the
+    /// lighting pass) or `pass` (a pass of their own); the same image.
+    pub outlines: OutlineChords,
 }
 
 impl Default for TransmittedMapSettings {
@@ -62,6 +103,7 @@ impl Default for TransmittedMapSettings {
         Self {
             texel_mm: DEFAULT_MAP_TEXEL_MM,
             pass: MapEvaluation::default(),
+            outlines: OutlineChords::default(),
         }
     }
 }

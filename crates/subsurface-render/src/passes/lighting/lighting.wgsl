@@ -2,7 +2,8 @@
 //   0: diffuse radiance (irradiance x albedo), the part that is blurred
 //   1: specular radiance, added after the blur and never blurred
 //   2: linear view depth in scene units (the blur width is divided by it)
-//   3: SSS strength (0 = not skin), scene units per profile millimetre, profile row
+//   3: SSS strength (0 = not skin), scene units per profile millimetre, profile row, 1 where
+//      the outline pass adds the lights' chords
 
 
 struct LitVarying {
@@ -139,6 +140,8 @@ struct Shading {
     transmitted: vec3<f32>, // T(s) x back irradiance of the 2010-style methods (transmittance.wgsl)
     tsm: vec3<f32>,         // translucent shadow maps: T(s) x blurred back-side irradiance
     specular: vec3<f32>,
+    // The pixel's chords are left to the outline pass (OUTLINE_PASS, where the map misses it).
+    outline: bool,
 };
 
 // The radiance `light` sends toward `world` (direction `l` to the light): its colour, the
@@ -159,6 +162,13 @@ fn light_radiance(light: Light, world: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     return min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
 }
 
+// Where a pipeline that reads `diffusion` from the transmitted map runs each light's chord at
+// the pixels the map misses (`frame_plan::LightingVariant::outline_pass`): false in `shade`
+// below, true in the outline pass after the lighting pass (outline.wgsl). A CPU rasteriser
+// runs a branch's code at every pixel whether or not any takes it; a pass of its own runs it
+// only where the pixels are.
+override OUTLINE_PASS: bool = false;
+
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
 // `screen`: where `world` is the pixel's surface, `diffusion` may read its transmitted light
@@ -169,6 +179,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     s.transmitted = vec3<f32>(0.0);
     s.tsm = vec3<f32>(0.0);
     s.specular = vec3<f32>(0.0);
+    s.outline = false;
     let count = min(lights.count, MAX_LIGHTS);
     // Translucent shadow maps are method 4's: a pipeline built for another leaves them out.
     let tsm = with_tsm && (TRANSMITTANCE_METHOD == FOLLOW_UNIFORM || TRANSMITTANCE_METHOD == TRANSMITTANCE_TSM);
@@ -179,7 +190,10 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     // view and the thin rim make an outline's transmitted light change within a texel, and the
     // nearest texel alone, lying further in, left the finger's light-side outline at -27 %
     // against the path tracer instead of -17 % (docs/lab/fidelity.md, finding 14).
+    // With OUTLINE_PASS the chords are left to the outline pass (outline.wgsl), and the
+    // nearest texel's diffuse light stands here alone.
     let from_map = TRANSMITTANCE_METHOD == TRANSMITTANCE_DIFFUSION && LATERAL_SOURCE == LATERAL_MAP;
+    let chords_here = !(from_map && OUTLINE_PASS);
     var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
     if (from_map) {
         mapped = transmitted_from_map(screen);
@@ -203,7 +217,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         }
         s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
         s.specular += radiance * shadow * boundary_specular(n, l, v, m, rho_s);
-        if (!mapped.on_surface) {
+        if (!mapped.on_surface && chords_here) {
             let t = transmittance(light, world, n_vertex, l, v, shadow);
             s.transmitted += radiance * t.diffuse;
             s.specular += radiance * t.ballistic;
@@ -215,6 +229,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             s.specular += mapped.t.ballistic;
         } else {
             s.transmitted = max(s.transmitted, mapped.t.diffuse);
+            s.outline = !chords_here;
         }
     }
     return s;
@@ -271,7 +286,9 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     out.diffuse = vec4<f32>(min(out.diffuse.rgb, vec3<f32>(HALF_MAX)), 1.0);
     out.specular = vec4<f32>(min(s.specular, vec3<f32>(HALF_MAX)), 1.0);
     out.depth = depth;
-    out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), 0.0);
+    // a: where the outline pass adds the chords (its full-screen mark reads it).
+    let outline = s.outline && ts.x <= 0.5 && lights.thickness_view == 0u;
+    out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), select(0.0, 1.0, outline));
     return out;
 }
 

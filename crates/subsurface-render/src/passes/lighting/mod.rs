@@ -17,9 +17,12 @@
 //! ([`screen_layout`]). The texture-space pass draws its UV-space irradiance with the same
 //! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_transmitted_map`].
 
+mod outline;
 mod targets;
 
-pub use targets::{DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout};
+pub use targets::{
+    DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout, zbuffer_format,
+};
 use targets::{dummy_transmitted_map, screen_bind_group};
 
 use wgpu::util::DeviceExt;
@@ -29,7 +32,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::object::GpuObject;
 use crate::passes::maps;
 use crate::passes::overrides::{
-    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, TRANSMITTANCE_METHOD, lateral,
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, OUTLINE_PASS, TRANSMITTANCE_METHOD, lateral,
 };
 use crate::passes::transmitted_map::TransmittedMapPass;
 use crate::passes::util;
@@ -38,7 +41,16 @@ use crate::uniforms::{CameraUniform, LightsUniform};
 
 /// The lighting shader's WGSL: common declarations, lighting.wgsl and the shadow, transmittance,
 /// bounce and transmitted-map code it calls.
-pub const SHADER: &str = lighting_shader!(include_str!("../transmitted_map/transmitted_map.wgsl"));
+pub const SHADER: &str = lighting_shader!(
+    include_str!("../transmitted_map/transmitted_map.wgsl"),
+    include_str!("outline.wgsl"),
+);
+
+/// The outline pass's full-screen mark (outline_mark.wgsl after the full-screen vertex stage).
+pub const OUTLINE_MARK_SHADER: &str = concat!(
+    include_str!("../fullscreen.wgsl"),
+    include_str!("outline_mark.wgsl")
+);
 
 /// Layout of group 0 of the lighting pass (`camera`, `lights`, `shadow_atlas`, `tsm_atlas`,
 /// `shadow_depth` and `shadow_compare` in lighting.wgsl, `flux_position`, `flux_normal` and
@@ -147,14 +159,22 @@ fn lighting_pipeline(
         // the normal of back faces.
         cull_mode: None,
         depth: util::DepthTest::Prepassed,
-        constants: &[
-            (TRANSMITTANCE_METHOD, f64::from(variant.method)),
-            (BOUNCE_SOURCE, f64::from(variant.bounce)),
-            (LATERAL_SOURCE, f64::from(variant.lateral)),
-            (DIFFUSION_TERMS, f64::from(variant.terms.0)),
-        ],
+        stencil: Some((zbuffer_format(device), Default::default())),
+        constants: &variant_constants(variant),
+        blend: None,
     }
     .create(device)
+}
+
+/// The overrides that build the lighting shader's entry points for `variant`.
+fn variant_constants(variant: LightingVariant) -> [(&'static str, f64); 5] {
+    [
+        (TRANSMITTANCE_METHOD, f64::from(variant.method)),
+        (BOUNCE_SOURCE, f64::from(variant.bounce)),
+        (LATERAL_SOURCE, f64::from(variant.lateral)),
+        (DIFFUSION_TERMS, f64::from(variant.terms.0)),
+        (OUTLINE_PASS, f64::from(u8::from(variant.outline_pass))),
+    ]
 }
 
 /// Lights every pixel: writes diffuse and specular radiance, linear depth and the SSS inputs
@@ -172,6 +192,11 @@ pub struct LightingPass {
     /// far for the map's texels, the plan's `taps_objects`).
     taps: Option<usize>,
     taps_objects: Vec<bool>,
+    /// The outline pass's pipeline for the plan's variant, where it has one
+    /// ([`LightingVariant::outline_pass`]), and the objects it draws (the plan's
+    /// `outline_objects`).
+    outline: Option<(LightingVariant, [wgpu::RenderPipeline; 2])>,
+    outline_objects: Vec<bool>,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// The transmitted map's passes, on the same shader and groups.
@@ -260,13 +285,21 @@ impl LightingPass {
         // Meshes drawn without culling in any order would shade every surface a pixel covers
         // that lands before the nearest one (the back of a head, the far side of a hand): a
         // depth-only pass first leaves the lighting shader one fragment per pixel.
-        let prepass = util::depth_prepass_pipeline(device, &prepass_layout, &module, "vs_main");
+        let prepass = util::depth_prepass_pipeline(
+            device,
+            &prepass_layout,
+            &module,
+            "vs_main",
+            zbuffer_format(device),
+        );
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         let mut pass = Self {
             prepass,
             pipelines: vec![(plan.lighting, pipeline)],
             taps: None,
             taps_objects: Vec::new(),
+            outline: None,
+            outline_objects: Vec::new(),
             current: 0,
             module,
             layout,
@@ -278,6 +311,7 @@ impl LightingPass {
             lights,
         };
         pass.set_taps_objects(device, plan);
+        pass.set_outline(device, plan);
         pass
     }
 
@@ -307,6 +341,7 @@ impl LightingPass {
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.current = self.pipeline_index(&ctx.device, plan.lighting);
         self.set_taps_objects(&ctx.device, plan);
+        self.set_outline(&ctx.device, plan);
         self.map.prepare(&ctx.device, plan);
     }
 
@@ -331,6 +366,7 @@ impl LightingPass {
         self.taps = (key.lateral == lateral::MAP && plan.taps_objects.contains(&true)).then(|| {
             let taps = LightingVariant {
                 lateral: plan.taps_objects_lateral,
+                outline_pass: false,
                 ..key
             };
             self.pipeline_index(device, taps)
@@ -465,7 +501,12 @@ impl LightingPass {
                 util::depth_attachment(
                     &targets.zbuffer,
                     wgpu::LoadOp::Load,
-                    wgpu::StoreOp::Discard,
+                    // The outline pass tests against it after this one.
+                    if self.outline.is_some() {
+                        wgpu::StoreOp::Store
+                    } else {
+                        wgpu::StoreOp::Discard
+                    },
                 ),
                 timer.writes(),
             );
@@ -473,5 +514,13 @@ impl LightingPass {
             self.draw_lit_objects(&mut pass, objects, maps);
         }
         timer.end(profiler, encoder);
+        self.encode_outline(
+            encoder,
+            targets,
+            [&diffuse, &specular],
+            objects,
+            maps,
+            profiler,
+        );
     }
 }

@@ -27,7 +27,8 @@ pub struct LightingTargets {
     pub specular: wgpu::Texture,
     /// Linear view depth in scene units (the camera's far plane where nothing was drawn).
     pub depth: wgpu::Texture,
-    /// r = SSS strength (0 = not skin), g = scene units per profile millimetre.
+    /// r = SSS strength (0 = not skin), g = scene units per profile millimetre, b = the
+    /// profile's row, a = 1 where the outline pass adds the lights' chords.
     pub sss: wgpu::Texture,
     pub(super) zbuffer: wgpu::TextureView,
     /// `diffusion`'s transmitted light and the bounce at reduced resolution, when the targets were made with a
@@ -35,6 +36,8 @@ pub struct LightingTargets {
     pub map: Option<TransmittedMapTargets>,
     /// Group 3 of the lighting pass ([`screen_layout`]): the transmitted map, or a 1x1 stand-in.
     pub(super) screen: wgpu::BindGroup,
+    /// The outline pass's mark reads `sss` through it (`outline::mark_layout`).
+    pub(super) outline_mark: wgpu::BindGroup,
 }
 
 /// Layout of group 3 of the lighting pass (`transmitted_map` in lighting.wgsl). Pipelines built on
@@ -88,6 +91,16 @@ impl LightingTargets {
         let device = &ctx.device;
         let (map, screen) = map_targets(ctx, width, height, map);
         let target = |label, format| util::render_target(device, label, width, height, format);
+        let sss = target("sss strength", SSS_FORMAT);
+        let outline_mark = util::bind_group(
+            device,
+            "outline mark",
+            &super::outline::mark_layout(device),
+            [(
+                0,
+                wgpu::BindingResource::TextureView(&sss.create_view(&Default::default())),
+            )],
+        );
         Self {
             width,
             height,
@@ -107,10 +120,11 @@ impl LightingTargets {
             ),
             specular: target("specular", RADIANCE_FORMAT),
             depth: target("linear depth", DEPTH_FORMAT),
-            sss: target("sss strength", SSS_FORMAT),
-            zbuffer: util::depth_buffer(device, "z-buffer", width, height),
+            sss,
+            zbuffer: util::depth_buffer(device, "z-buffer", width, height, zbuffer_format(device)),
             map,
             screen,
+            outline_mark,
         }
     }
 
@@ -160,4 +174,19 @@ fn map_targets(
         None => screen_bind_group(device, &dummy_transmitted_map(device)),
     };
     (map, screen)
+}
+
+/// The lighting pass's z-buffer, shared by the depth pre-pass, the lighting pass and the
+/// outline pass, whose stencil marks the pixels the outline pass shades: 32-bit float depth
+/// where the device has it with a stencil, as the other passes' z-buffers
+/// ([`util::ZBUFFER_FORMAT`]), else 24 bits.
+pub fn zbuffer_format(device: &wgpu::Device) -> wgpu::TextureFormat {
+    if device
+        .features()
+        .contains(wgpu::Features::DEPTH32FLOAT_STENCIL8)
+    {
+        wgpu::TextureFormat::Depth32FloatStencil8
+    } else {
+        wgpu::TextureFormat::Depth24PlusStencil8
+    }
 }

@@ -53,7 +53,9 @@ impl IrradiancePass {
             depth: util::DepthTest::Off,
             // Follows `lights.transmittance` (TRANSMITTANCE_METHOD's default): the pass is
             // built once per texture-space setup, not per method.
+            stencil: None,
             constants: &[],
+            blend: None,
         }
         .create(device);
         Self { pipeline }

@@ -209,13 +209,14 @@ impl TransmittedLightPass {
             ),
         ];
         let target = Some(util::additive_target(RADIANCE_FORMAT));
-        let pipeline = fullscreen::pipeline_with_constants(
+        let pipeline = fullscreen::pipeline_with(
             device,
             &module,
             Some(&layout),
             "fs_deferred_transmitted",
             &[target.clone(), target],
             &constants,
+            None,
         );
         Self {
             pipeline,

@@ -425,7 +425,9 @@ fn raster_pipelines(
             targets,
             cull_mode: Some(wgpu::Face::Back),
             depth,
+            stencil: None,
             constants: &constants,
+            blend: None,
         }
         .create(device)
     };

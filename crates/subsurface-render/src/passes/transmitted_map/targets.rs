@@ -258,7 +258,13 @@ impl TransmittedMapTargets {
             height: h,
             map,
             layers,
-            zbuffer: util::depth_buffer(device, "transmitted map z-buffer", w, h),
+            zbuffer: util::depth_buffer(
+                device,
+                "transmitted map z-buffer",
+                w,
+                h,
+                util::ZBUFFER_FORMAT,
+            ),
             surface,
         }
     }

@@ -1,0 +1,137 @@
+// Reading the transmitted map (transmitted_map/) at a pixel of the lighting pass: which of the map's
+// texels hold the pixel's surface, and the light they hold. The lighting, outline and bounce
+// code (lighting.wgsl, outline.wgsl, bounce.wgsl) share these.
+
+// How far (profile mm, along the view) a transmitted-map texel's surface may lie from the pixel's
+// surface extended as a plane, for the pixel to take its light: a quarter of the kernel's own
+// decay length (0.9 mm for skin1), so the four texels around a pixel on one smooth surface
+// agree, and a sheet in front of another (tests/transmittance.rs: without the test the front
+// one's pixels beside the edge took the back one's light), a finger in front of a palm, or a
+// curved rim where the plane leaves the surface within a texel takes the texel nearest its
+// depth instead (transmitted_from_map).
+const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
+// Below this share of the bilinear weight on the pixel's own surface, the pixel takes the
+// texel of the 4 x 4 around it nearest its depth rather than blend texels of other surfaces.
+const LATERAL_MIN_WEIGHT: f32 = 0.3;
+// How far in depth, in depth tolerances, the nearest texel of a silhouette pixel may lie.
+const LATERAL_NEAREST_TOLERANCES: f32 = 16.0;
+
+// The pixel the lighting pass shades, for reading `diffusion` and the bounce from the map: its
+// centre in pixels, its view depth and that depth's change per pixel across the surface.
+struct ScreenSample {
+    xy: vec2<f32>,
+    depth: f32,
+    gradient: vec2<f32>,
+};
+
+// The pixel's surface extended as a plane (its depth derivatives), at the centre of the map
+// texel `texel` of a map `scale` times the frame's size: the depth a texel on the pixel's own
+// surface holds.
+fn plane_depth(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>) -> f32 {
+    let centre = (vec2<f32>(texel) + 0.5) / scale;
+    return screen.depth + dot(screen.gradient, centre - screen.xy);
+}
+
+// What the lighting pass's pixel reads from the transmitted map: every light's transmitted light,
+// and whether it came from texels of the pixel's own surface.
+struct MapRead {
+    t: Transmitted,
+    on_surface: bool,
+};
+
+// How far in depth (scene units) a map texel's surface may lie from the pixel's own.
+fn map_depth_tolerance() -> f32 {
+    let units_per_mm = object.world_per_mm * object.translucency;
+    return LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 1e-3) * units_per_mm;
+}
+
+// The four map texels around a pixel, from `base` (k = 0..3: base + (k % 2, k / 2)): the
+// bilinear weight of each that holds the pixel's surface (0 for the others), their sum, and
+// their diffuse light so weighted.
+struct MapTexels {
+    base: vec2<i32>,
+    weights: vec4<f32>,
+    weight: f32,
+    diffuse: vec3<f32>,
+};
+
+// The four texels around `screen`'s pixel that count with their bilinear weights where their
+// surface lies within the tolerance of the pixel's, extended as a plane to the texel's centre
+// (so a slanted surface keeps its texels and a depth edge loses them).
+fn map_texels(screen: ScreenSample) -> MapTexels {
+    let size = vec2<i32>(textureDimensions(transmitted_map));
+    let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
+    let pos = screen.xy * scale - 0.5;
+    var out = MapTexels(vec2<i32>(floor(pos)), vec4<f32>(0.0), 0.0, vec3<f32>(0.0));
+    let f = pos - floor(pos);
+    let tolerance = map_depth_tolerance();
+    for (var k = 0; k < 4; k++) {
+        let texel = out.base + vec2<i32>(k % 2, k / 2);
+        if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
+            continue;
+        }
+        let d = textureLoad(transmitted_map, texel, 0, 0);
+        if (d.w <= 0.0 || abs(d.w - plane_depth(screen, texel, scale)) > tolerance) {
+            continue;
+        }
+        let w = select(1.0 - f.x, f.x, k % 2 == 1) * select(1.0 - f.y, f.y, k / 2 == 1);
+        out.weights[k] = w;
+        out.weight += w;
+        out.diffuse += d.rgb * w;
+    }
+    return out;
+}
+
+// `diffusion`'s transmitted light at `screen`'s pixel, every light's together, interpolated
+// from the map the map pass filled at 1/N resolution (fs_transmitted in lighting.wgsl).
+// The four map texels around the pixel count with their bilinear weights where their surface
+// lies within the tolerance of the pixel's, extended as a plane to the texel's centre (so a
+// slanted surface keeps its texels and a depth edge loses them). Where they carry too little
+// of the weight (a silhouette, a depth edge) the texel of the 4 x 4 around the pixel nearest
+// its depth serves (its diffuse part), marked as not on the pixel's surface (shade then runs
+// the chords there);
+// where none of the 4 x 4 lies near the pixel's depth (a back face of an open mesh, which the
+// map pass culls) it is zero, and the chords alone serve.
+// The renderer sizes the map for the nearest skin (`lateral_texel_mm` there); skin whose
+// texels come out more than `MAX_TEXEL_FACTOR` times coarser is drawn with a pipeline that
+// evaluates everything per pixel (LATERAL_SOURCE 2).
+fn transmitted_from_map(screen: ScreenSample) -> MapRead {
+    var out: Transmitted;
+    out.diffuse = vec3<f32>(0.0);
+    out.ballistic = vec3<f32>(0.0);
+    if (object.translucency <= 0.0) {
+        return MapRead(out, true);
+    }
+    let around = map_texels(screen);
+    if (around.weight >= LATERAL_MIN_WEIGHT) {
+        for (var k = 0; k < 4; k++) {
+            if (around.weights[k] > 0.0) {
+                let texel = around.base + vec2<i32>(k % 2, k / 2);
+                out.ballistic += textureLoad(transmitted_map, texel, 1, 0).rgb * around.weights[k];
+            }
+        }
+        out.diffuse = around.diffuse / around.weight;
+        out.ballistic /= around.weight;
+        return MapRead(out, true);
+    }
+    let base = around.base;
+    let size = vec2<i32>(textureDimensions(transmitted_map));
+    let tolerance = map_depth_tolerance();
+    // Only the diffuse part: the pixel runs its own unscattered and singly scattered light.
+    var nearest = vec4<f32>(0.0, 0.0, 0.0, LATERAL_NEAREST_TOLERANCES * tolerance);
+    for (var j = -1; j < 3; j++) {
+        for (var i = -1; i < 3; i++) {
+            let texel = base + vec2<i32>(i, j);
+            if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
+                continue;
+            }
+            let d = textureLoad(transmitted_map, texel, 0, 0);
+            let gap = abs(d.w - screen.depth);
+            if (d.w > 0.0 && gap < nearest.w) {
+                nearest = vec4<f32>(d.rgb, gap);
+            }
+        }
+    }
+    return MapRead(Transmitted(nearest.rgb, vec3<f32>(0.0)), false);
+}
+
