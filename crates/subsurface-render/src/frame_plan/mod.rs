@@ -190,6 +190,11 @@ impl FramePlan {
                     && features.compute_storage,
             }
         };
+        let source = match (diffusion, map_downsample > 1) {
+            (false, _) => lateral::NONE,
+            (true, true) => lateral::MAP,
+            (true, false) => per_pixel,
+        };
         let lighting = LightingVariant {
             method: t.method.code(),
             bounce: match (bounce_ring, bounce_layer) {
@@ -197,22 +202,14 @@ impl FramePlan {
                 (_, Some(_)) => bounce::MAP,
                 (_, None) => bounce::GATHER,
             },
-            lateral: match (diffusion, map_downsample > 1) {
-                (false, _) => lateral::NONE,
-                (true, true) => lateral::MAP,
-                (true, false) => per_pixel,
-            },
+            lateral: source,
             terms: Terms::of(settings),
-            outline_pass: false,
-        };
-        let lighting = LightingVariant {
-            outline_pass: lighting.lateral == lateral::MAP
+            outline_pass: source == lateral::MAP
                 && match settings.transmitted_map.outlines {
                     OutlineChords::Auto => features.masked_branches,
                     OutlineChords::Lighting => false,
                     OutlineChords::Pass => true,
                 },
-            ..lighting
         };
         let taps_objects = lateral_taps_objects(scene, settings, width, height, map_downsample);
         let outline_objects = skin_pixel_mm(scene, width, height)

@@ -192,11 +192,8 @@ pub struct LightingPass {
     /// far for the map's texels, the plan's `taps_objects`).
     taps: Option<usize>,
     taps_objects: Vec<bool>,
-    /// The outline pass's pipeline for the plan's variant, where it has one
-    /// ([`LightingVariant::outline_pass`]), and the objects it draws (the plan's
-    /// `outline_objects`).
-    outline: Option<(LightingVariant, [wgpu::RenderPipeline; 2])>,
-    outline_objects: Vec<bool>,
+    /// The outline pass ([`LightingVariant::outline_pass`]).
+    outline: outline::Outline,
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     /// The transmitted map's passes, on the same shader and groups.
@@ -298,8 +295,7 @@ impl LightingPass {
             pipelines: vec![(plan.lighting, pipeline)],
             taps: None,
             taps_objects: Vec::new(),
-            outline: None,
-            outline_objects: Vec::new(),
+            outline: Default::default(),
             current: 0,
             module,
             layout,
@@ -502,7 +498,7 @@ impl LightingPass {
                     &targets.zbuffer,
                     wgpu::LoadOp::Load,
                     // The outline pass tests against it after this one.
-                    if self.outline.is_some() {
+                    if self.runs_outline() {
                         wgpu::StoreOp::Store
                     } else {
                         wgpu::StoreOp::Discard

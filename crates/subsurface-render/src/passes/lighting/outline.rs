@@ -10,7 +10,6 @@
 use super::{LightingPass, LightingTargets, RADIANCE_FORMAT, variant_constants, zbuffer_format};
 use crate::frame_plan::{FramePlan, LightingVariant};
 use crate::gpu::object::GpuObject;
-use crate::passes::overrides::lateral;
 use crate::passes::{fullscreen, util};
 use crate::timing::TimedPass;
 
@@ -47,18 +46,12 @@ pub(super) fn mark_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
-/// The outline pass's two pipelines for the lighting pipeline `variant`, on the lighting
-/// pass's z-buffer: the full-screen `fs_outline_mark` sets [`MARK`] where the lighting pass
-/// left the chords (its SSS target's `a`), `fs_outline` adds them there into the diffuse and
-/// specular targets.
-fn outline_pipelines(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    variant: LightingVariant,
-) -> [wgpu::RenderPipeline; 2] {
+/// The outline pass's full-screen mark: sets [`MARK`] where the lighting pass left the chords
+/// (its SSS target's `a`). One for every lighting variant.
+fn mark_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
     use wgpu::{CompareFunction, StencilOperation};
-    let format = zbuffer_format(device);
+    let module = util::wgsl_module(device, "outline_mark.wgsl", super::OUTLINE_MARK_SHADER);
+    let layout = util::pipeline_layout(device, "outline mark", &[&mark_layout(device)]);
     let targets = [RADIANCE_FORMAT, RADIANCE_FORMAT].map(|format| {
         Some(wgpu::ColorTargetState {
             format,
@@ -66,24 +59,33 @@ fn outline_pipelines(
             write_mask: wgpu::ColorWrites::ALL,
         })
     });
-    let mark_module = util::wgsl_module(device, "outline_mark.wgsl", super::OUTLINE_MARK_SHADER);
-    let mark_layout = util::pipeline_layout(device, "outline mark", &[&mark_layout(device)]);
-    let mark = fullscreen::pipeline_with(
+    fullscreen::pipeline_with(
         device,
-        &mark_module,
-        Some(&mark_layout),
+        &module,
+        Some(&layout),
         "fs_outline_mark",
         &targets,
         &[],
         Some(wgpu::DepthStencilState {
-            format,
+            format: zbuffer_format(device),
             depth_write_enabled: Some(false),
             depth_compare: Some(CompareFunction::Always),
             stencil: stencil(CompareFunction::Always, StencilOperation::Replace),
             bias: Default::default(),
         }),
-    );
-    let shade = util::MeshPipeline {
+    )
+}
+
+/// `fs_outline` for the lighting pipeline `variant`: adds the chords at the pixels the mark
+/// set into the diffuse and specular targets, on the lighting pass's z-buffer.
+fn shade_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    variant: LightingVariant,
+) -> wgpu::RenderPipeline {
+    use wgpu::{CompareFunction, StencilOperation};
+    util::MeshPipeline {
         label: "outline",
         layout,
         module,
@@ -93,34 +95,53 @@ fn outline_pipelines(
         cull_mode: None,
         depth: util::DepthTest::Prepassed,
         stencil: Some((
-            format,
+            zbuffer_format(device),
             stencil(CompareFunction::Equal, StencilOperation::Keep),
         )),
         constants: &variant_constants(variant),
         blend: Some(fullscreen::ADD),
     }
-    .create(device);
-    [mark, shade]
+    .create(device)
+}
+
+/// The outline pass's pipelines, each kept once built (the viewer switches settings back and
+/// forth), and the plan's use of them.
+#[derive(Default)]
+pub(super) struct Outline {
+    mark: Option<wgpu::RenderPipeline>,
+    /// `fs_outline` per lighting variant.
+    shades: Vec<(LightingVariant, wgpu::RenderPipeline)>,
+    /// The index in `shades` of the plan's variant; `None`: the plan has no outline pass.
+    current: Option<usize>,
+    /// For each object: the pass draws it (the plan's `outline_objects`).
+    objects: Vec<bool>,
 }
 
 impl LightingPass {
-    /// Takes `plan`'s outline pass: its pipeline (built when the variant changes) and objects,
-    /// or none.
+    /// Takes `plan`'s outline pass, building its pipelines the first time they are asked for.
     pub(super) fn set_outline(&mut self, device: &wgpu::Device, plan: &FramePlan) {
         let key = plan.lighting;
-        let wanted = key.outline_pass && key.lateral == lateral::MAP;
-        if !wanted {
-            self.outline = None;
-        } else if self.outline.as_ref().map(|(k, _)| *k) != Some(key) {
-            let pipelines = outline_pipelines(device, &self.layout, &self.module, key);
-            self.outline = Some((key, pipelines));
+        let outline = &mut self.outline;
+        outline.objects = plan.outline_objects.clone();
+        outline.current = None;
+        if !key.outline_pass {
+            return;
         }
-        self.outline_objects = plan.outline_objects.clone();
+        outline.mark.get_or_insert_with(|| mark_pipeline(device));
+        let index = match outline.shades.iter().position(|(k, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                let shade = shade_pipeline(device, &self.layout, &self.module, key);
+                outline.shades.push((key, shade));
+                outline.shades.len() - 1
+            }
+        };
+        outline.current = Some(index);
     }
 
     /// Whether the frame runs the outline pass.
     pub fn runs_outline(&self) -> bool {
-        self.outline.is_some() && self.outline_objects.contains(&true)
+        self.outline.current.is_some() && self.outline.objects.contains(&true)
     }
 
     /// The outline pass into the lighting pass's `diffuse` and `specular` views, timed as
@@ -134,12 +155,14 @@ impl LightingPass {
         maps: &[wgpu::BindGroup],
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
-        let Some((_, [mark, shade])) = &self.outline else {
+        let outline = &self.outline;
+        let (Some(mark), Some(current)) = (&outline.mark, outline.current) else {
             return;
         };
         if !self.runs_outline() {
             return;
         }
+        let shade = &outline.shades[current].1;
         let timer = TimedPass::begin(profiler, "outline", encoder);
         {
             let load = |v| util::color_attachment(v, wgpu::LoadOp::Load);
@@ -165,7 +188,7 @@ impl LightingPass {
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             pass.set_bind_group(3, &targets.screen, &[]);
             for (i, o) in objects.iter().enumerate() {
-                if self.outline_objects.get(i) == Some(&true) {
+                if outline.objects.get(i) == Some(&true) {
                     pass.set_bind_group(2, maps.get(i).unwrap_or(&self.default_maps), &[]);
                     o.draw(&mut pass);
                 }
