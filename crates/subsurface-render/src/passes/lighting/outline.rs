@@ -115,6 +115,9 @@ pub(super) struct Outline {
     current: Option<usize>,
     /// For each object: the pass draws it (the plan's `outline_objects`).
     objects: Vec<bool>,
+    /// The pixels `[x0, y0, x1, y1)` of those objects' boxes on screen: the full-screen mark
+    /// and the draws are scissored to them.
+    rect: Option<[u32; 4]>,
 }
 
 impl LightingPass {
@@ -123,6 +126,19 @@ impl LightingPass {
         let key = plan.lighting;
         let outline = &mut self.outline;
         outline.objects = plan.outline_objects.clone();
+        outline.rect = plan
+            .object_rects
+            .iter()
+            .zip(&plan.outline_objects)
+            .filter_map(|(rect, drawn)| rect.filter(|_| *drawn))
+            .reduce(|a, b| {
+                [
+                    a[0].min(b[0]),
+                    a[1].min(b[1]),
+                    a[2].max(b[2]),
+                    a[3].max(b[3]),
+                ]
+            });
         outline.current = None;
         if !key.outline_pass {
             return;
@@ -141,7 +157,7 @@ impl LightingPass {
 
     /// Whether the frame runs the outline pass.
     pub fn runs_outline(&self) -> bool {
-        self.outline.current.is_some() && self.outline.objects.contains(&true)
+        self.outline.current.is_some() && self.outline.rect.is_some()
     }
 
     /// The outline pass into the lighting pass's `diffuse` and `specular` views, timed as
@@ -156,12 +172,11 @@ impl LightingPass {
         profiler: Option<&wgpu_profiler::GpuProfiler>,
     ) {
         let outline = &self.outline;
-        let (Some(mark), Some(current)) = (&outline.mark, outline.current) else {
+        let (Some(mark), Some(current), Some([x0, y0, x1, y1])) =
+            (&outline.mark, outline.current, outline.rect)
+        else {
             return;
         };
-        if !self.runs_outline() {
-            return;
-        }
         let shade = &outline.shades[current].1;
         let timer = TimedPass::begin(profiler, "outline", encoder);
         {
@@ -180,6 +195,7 @@ impl LightingPass {
                 }),
                 timer.writes(),
             );
+            pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
             pass.set_stencil_reference(MARK);
             pass.set_pipeline(mark);
             pass.set_bind_group(0, &targets.outline_mark, &[]);
