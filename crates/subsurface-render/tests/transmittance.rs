@@ -642,6 +642,44 @@ fn thin_slab_scatters_light_once_toward_the_camera() {
     assert!(paper[32 * 64 + 40][0].abs() < 1e-6);
 }
 
+/// Single scattering reaches as far as the medium's unscattered light: its bound is an optical
+/// depth (the slowest channel keeps exp(-sigma_t s) of at least 0.2 %), not a length. Behind
+/// 12 mm of chicken1, a weak scatterer (sigma_t 0.165 per mm in red), the light scattered once
+/// is sigma_s' s exp(-sigma_t s) / 4, as on the 1 mm slab of skin above (a bound of 8 mm for
+/// every medium gave nothing here); behind 12 mm of skin1 (red keeps 0.01 %) it is skipped.
+#[test]
+fn single_scattering_reaches_as_far_as_the_medium_lets_light_through() {
+    if context().is_none() {
+        return;
+    }
+    let slab = |medium: &str| {
+        let mut s = backlit_material(
+            "{ shape = \"slab\", width = 0.05, height = 0.05, thickness = 0.012 }",
+            1024,
+            medium,
+        );
+        s.edit_materials(|m| m.roughness = 0.01);
+        s
+    };
+    let f0 = skin1_f0();
+    // Jensen et al. 2001's chicken1, 1/mm (eta 1.3, as skin1).
+    let sigma_s = [0.15f32, 0.21, 0.38];
+    let sigma_a = [0.015f32, 0.077, 0.19];
+    let want: [f32; 3] = std::array::from_fn(|c| {
+        let sigma_t = sigma_s[c] + sigma_a[c];
+        sigma_s[c] * 12.0 * (-sigma_t * 12.0).exp() / 4.0 * (1.0 - f0).powi(2)
+    });
+    let chicken = specular(&slab("chicken1"), TransmittanceMethod::Diffusion);
+    assert_transmits(
+        chicken[32 * 64 + 40],
+        want,
+        "sigma_s' s exp(-sigma_t s) / 4",
+    );
+    let skin = specular(&slab("skin1"), TransmittanceMethod::Diffusion);
+    let beyond = skin[32 * 64 + 40];
+    assert!(beyond[0].abs() < 1e-4, "{beyond:?}");
+}
+
 /// A block of skin two thicknesses deep, lit from straight behind: 16 mm for x < 0 and 6 mm
 /// beyond (two slabs side by side, front faces at z = 0), seen head-on, 64 x 64 pixels over
 /// 106 mm. Light that crossed the thin part spreads under the thick part beside the step, as

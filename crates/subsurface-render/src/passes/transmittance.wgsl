@@ -280,10 +280,14 @@ fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: 
 // (albedo x E). It is what lights a backlit finger's rim, where the lit side is a couple of
 // millimetres away but the chord along the light is long; on a slab facing the light with the
 // camera behind it, t + s_i is the thickness s everywhere and L = sigma_s' s exp(-sigma_t s) / 4.
-// Eight steps over the thickness s at p, and only where s is at most 8 mm: past that, on a
-// slab, red keeps exp(-sigma_t s) = 0.2 % (skin1) and the march would cost eight loads per
-// light over most of a head for nothing (the five-light head on lavapipe: without this bound
-// the march alone added 35 % to the frame; with it, all of `diffusion` adds 6-8 %).
+// Eight steps over the thickness s at p, and only where the medium's slowest channel keeps
+// exp(-sigma_t s) of at least 0.2 % (SCATTER_DEPTH): past that the march would cost eight
+// loads per light over most of a head for nothing (the five-light head on lavapipe: without a
+// bound the march alone added 35 % to the frame; with it, all of `diffusion` adds 6-8 %).
+// The bound is an optical depth, not a length: it is 8 mm in skin1, 5.6 in skin2, but 38 mm in
+// chicken1, whose light mostly crosses a 10 mm sphere unscattered or scattered once (a bound of
+// 8 mm for every medium left a 15 mm slab of chicken1 -23 % against the path tracer, and
+// +4 % with this one; docs/lab/suite.md).
 const SCATTER_STEPS: i32 = 8;
 // The lighting pipeline that reads the transmitted map runs `transmittance` only at the pixels the
 // map has no texel for (an outline; shade in lighting.wgsl), with this many steps: the code a
@@ -294,7 +298,13 @@ const SCATTER_STEPS: i32 = 8;
 const OUTLINE_SCATTER_STEPS: i32 = 4;
 // An override, so that each pipeline's march has a constant trip count.
 override MARCH_STEPS: i32 = select(SCATTER_STEPS, OUTLINE_SCATTER_STEPS, LATERAL_SOURCE == LATERAL_MAP);
-const SCATTER_RANGE_MM: f32 = 8.0;
+// exp(-6.2) = 0.2 %: skin1's red (sigma_t 0.772 per mm) at 8 mm, the bound this replaced.
+const SCATTER_DEPTH: f32 = 6.2;
+
+// The object's smallest extinction over the channels: the slowest decay of unscattered light.
+fn min_extinction() -> f32 {
+    return min(min(object.extinction.x, object.extinction.y), object.extinction.z);
+}
 
 fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>, s_mm: f32) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
@@ -547,7 +557,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 // onto the unblurred specular target (and a lit point's own single scattering
                 // is a reflection term this renderer does not model).
                 var single = vec3<f32>(0.0);
-                if (has_term(TERM_SINGLE_SCATTERING) && facing <= 0.0 && s_mm <= SCATTER_RANGE_MM) {
+                if (has_term(TERM_SINGLE_SCATTERING) && facing <= 0.0 && s_mm * min_extinction() <= SCATTER_DEPTH) {
                     single = single_scattering(light, p, n_vertex, l, v, s_mm);
                 }
                 out.ballistic = (ballistic + single) * unlit;
