@@ -10,6 +10,8 @@ held-out third, and their path-traced references.
     python3 tools/reference/suite.py queue               # the render order
     python3 tools/reference/suite.py report [NAME ...]   # real-time errors: references/suite/report.json,
                                                          # a Markdown table, docs/images/generalization.png
+    python3 tools/reference/suite.py explain [NAME ...]  # each miss rendered with one part changed at a time
+    python3 tools/reference/suite.py --set calibration ...  # the same on the calibration set of curved parts
 
 Run from the repository root with a `subsurface` binary (SUBSURFACE_BIN, else target/release or
 target/debug) and Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`; libllvm19 for the fast
@@ -57,6 +59,7 @@ sys.path.insert(0, HERE)
 import render_reference  # noqa: E402
 from make_references import subsurface_bin  # noqa: E402
 
+SET = "suite"  # or "calibration" (--set): which design, scene folder and reference folder
 SCENES = os.path.join(ROOT, "scenes", "suite")
 # SUITE_REFS: another folder for the references (trials that must not touch the committed ones).
 REFS = os.environ.get("SUITE_REFS") or os.path.join(ROOT, "references", "suite")
@@ -87,6 +90,12 @@ SHAPES = {
     "cyl8": ("cylinder", 0.008),  # diameters
     "cyl12": ("cylinder", 0.012),
     "cyl18": ("cylinder", 0.018),
+    # Calibration radii (not in the suite's design; see CALIBRATION).
+    "cyl6": ("cylinder", 0.006),
+    "cyl10": ("cylinder", 0.010),
+    "cyl14": ("cylinder", 0.014),
+    "sph14": ("sphere", 0.014),
+    "sph20": ("sphere", 0.020),
     "sph10": ("sphere", 0.010),
     "sph25": ("sphere", 0.025),
     "wedge": ("wedge", 0.025),  # 0..25 mm thick, as the canonical wedge
@@ -173,8 +182,24 @@ DESIGN = [
     ("head", "custom", "back15"),
 ]
 
+# The calibration set (issue 39, item 5): curved parts of sizes the suite does not have, in the
+# two skins, lit from behind on and off the axis, rendered to fit constants against. The suite's
+# own scenes are its test, so a constant fitted here leaves the whole suite held out.
+# `suite.py --set calibration ...` works on it: scenes/calibration/, references/calibration/.
+CALIBRATION = [
+    (shape, medium, light)
+    for shape in ("cyl6", "cyl10", "cyl14")
+    for medium in ("skin1", "skin2")
+    for light in ("back0", "back35")
+] + [
+    ("sph14", "skin1", "back15"),
+    ("sph14", "skin2", "back15"),
+    ("sph20", "skin2", "back35"),
+]
+
 # Rough cost of a shape's reference (image area covered, path lengths), for the render order.
-SHAPE_COST = ["slab1", "slab3", "cyl8", "sph10", "slab8", "cyl12", "wedge", "sph25", "slab15", "cyl18", "hand", "head"]
+SHAPE_COST = ["slab1", "slab3", "cyl6", "cyl8", "sph10", "slab8", "cyl10", "cyl12", "sph14", "cyl14", "wedge",
+              "sph20", "sph25", "slab15", "cyl18", "hand", "head"]
 MEDIUM_COST = ["ketchup", "chicken1", "skin1", "custom", "skin2", "marble"]
 
 SIZE = 128  # image width and height (pixels); region means need few pixels
@@ -186,9 +211,10 @@ def scene_name(shape, medium, light):
 
 
 def design():
-    names = [scene_name(*d) for d in DESIGN]
-    assert len(set(names)) == len(names), "duplicate scenes in DESIGN"
-    return {scene_name(*d): d for d in DESIGN}
+    rows = CALIBRATION if SET == "calibration" else DESIGN
+    names = [scene_name(*d) for d in rows]
+    assert len(set(names)) == len(names), "duplicate scenes in the design"
+    return {scene_name(*d): d for d in rows}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -691,6 +717,8 @@ def choose_holdout(seed=HOLDOUT_SEED):
 
 
 def cmd_holdout(a):
+    if SET == "calibration":
+        sys.exit("error: the calibration set has no held-out part (the suite is its test)")
     path = os.path.join(SCENES, "holdout.json")
     held = choose_holdout(a.seed)
     if os.path.isfile(path) and not a.force:
@@ -719,6 +747,9 @@ def cmd_holdout(a):
 
 
 def load_holdout():
+    if SET == "calibration":
+        # Fitted on whole; what it is tested on is the suite.
+        return {"held_out": []}
     path = os.path.join(SCENES, "holdout.json")
     if not os.path.isfile(path):
         sys.exit(f"error: {path} is missing: choose the held-out third (suite.py holdout) before any reference")
@@ -1292,9 +1323,35 @@ def cmd_report(a):
     if a.markdown:
         with open(a.markdown, "w") as f:
             f.write(md + "\n")
-    hist = a.histogram or os.path.join(ROOT, "docs", "images", "generalization.png")
+    hist = a.histogram or os.path.join(ROOT, "docs", "images",
+                                       "calibration.png" if SET == "calibration" else "generalization.png")
     drawn = report_histogram(doc, hist)
     print(f"wrote {out}" + (f", {hist}" if drawn else "") + f" ({doc['seconds']:.0f} s)", file=sys.stderr)
+
+
+def cmd_explain(a):
+    import suite_explain
+
+    exe = subsurface_bin()
+    env = dict(os.environ)
+    env.setdefault("WGPU_BACKEND", "vulkan")
+    report = a.report or os.path.join(REFS, "report.json")
+    with open(report) as f:
+        doc = json.load(f)
+    misses = [(n, r, g["error"], s["held_out"]) for n, s in sorted(doc["scenes"].items())
+              for r, g in s["configs"]["default"]["regions"].items()
+              if g["error"] is not None and g["stderr"] is not None and g["stderr"] <= doc["stderr_max"]
+              and abs(g["error"]) > a.band and (not a.names or n in a.names)]
+    print(f"{len(misses)} regions outside ±{100 * a.band:.0f} % in {report}", file=sys.stderr)
+    recs = suite_explain.explain(misses, lambda n, args, tmp, ss: run_compare(exe, env, n, args, tmp, ss), a.band)
+    out = a.out or os.path.join(REFS, "misses.json")
+    suite_explain.save(recs, out, a.band)
+    md = suite_explain.markdown(recs, a.band)
+    print(md)
+    if a.markdown:
+        with open(a.markdown, "w") as f:
+            f.write(md + "\n")
+    print(f"wrote {out}", file=sys.stderr)
 
 
 def cmd_queue(_a):
@@ -1305,6 +1362,9 @@ def cmd_queue(_a):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--set", choices=("suite", "calibration"), default="suite",
+                   help="the suite (scenes/suite, references/suite) or the calibration set of curved parts "
+                        "(scenes/calibration, references/calibration), fitted on and never a test")
     sub = p.add_subparsers(dest="cmd", required=True)
     g = sub.add_parser("generate", help="write scenes/suite/*.toml, *.regions.json and suite.json")
     g.add_argument("names", nargs="*")
@@ -1344,7 +1404,19 @@ def main():
     rp.add_argument("--out", help="default: references/suite/report.json")
     rp.add_argument("--markdown", metavar="FILE", help="also write the Markdown tables to FILE")
     rp.add_argument("--histogram", metavar="PNG", help="default: docs/images/generalization.png")
+    ex = sub.add_parser("explain", help="what each region outside the band is made of: the scene rendered again "
+                        "with one part of the method changed at a time (references/suite/misses.json)")
+    ex.add_argument("names", nargs="*", help="default: every scene with a miss in the report")
+    ex.add_argument("--band", type=float, default=0.25, help="regions outside this relative error (default 0.25)")
+    ex.add_argument("--report", help="default: references/suite/report.json")
+    ex.add_argument("--out", help="default: references/suite/misses.json")
+    ex.add_argument("--markdown", metavar="FILE", help="also write the Markdown table to FILE")
     a = p.parse_args()
+    global SET, SCENES, REFS
+    SET = a.set
+    if SET == "calibration":
+        SCENES = os.path.join(ROOT, "scenes", "calibration")
+        REFS = os.environ.get("SUITE_REFS") or os.path.join(ROOT, "references", "calibration")
     commands = {
         "generate": cmd_generate,
         "holdout": cmd_holdout,
@@ -1353,6 +1425,7 @@ def main():
         "check": cmd_check,
         "report": cmd_report,
         "queue": cmd_queue,
+        "explain": cmd_explain,
     }
     commands[a.cmd](a)
 

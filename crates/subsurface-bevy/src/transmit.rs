@@ -102,12 +102,14 @@ const ADD_WGSL: &str = include_str!("add.wgsl");
 
 /// The render settings transmittance runs with: the quality preset's, with what this
 /// integration does not have turned off (the bounce needs a flux pyramid, the lateral map
-/// and the diffusion source's shadow shift are terms of subsurface-render's own lighting
-/// pass), as in subsurface-render's `skin_in_your_renderer` example.
+/// and the diffusion source's shadow shift and the thin parts' reflectance are terms of
+/// subsurface-render's own lighting pass), as in subsurface-render's `skin_in_your_renderer`
+/// example.
 pub(crate) fn settings(quality: crate::Quality) -> RenderSettings {
     let mut s = RenderSettings::preset(quality);
     s.transmitted_map.texel_mm = 0.0;
     s.sss.source_shift = false;
+    s.sss.thin_parts = false;
     s.bounce.ring = 0;
     s
 }

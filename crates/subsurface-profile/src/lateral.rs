@@ -146,7 +146,7 @@ impl TransmittanceLut {
         Self::from_table(table, resolution, |s| table.rise_at(s))
     }
 
-    fn from_table(
+    pub(crate) fn from_table(
         table: &TransportTable,
         resolution: u32,
         f: impl Fn(f64) -> [f64; 3],

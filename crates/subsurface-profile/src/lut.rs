@@ -168,6 +168,14 @@ impl TransmittanceLut {
         })
     }
 
+    /// What a part `s` mm thick reflects of the light entering its lit face, as a share of the
+    /// half-space's albedo ([`crate::TransportTable::reflected_at`]), over `0..=s_max_mm` of
+    /// the table: the rest leaves through the far face (an ear or an eyelid lit from the front
+    /// reflects less red than the cheek).
+    pub fn thin_reflectance(table: &crate::TransportTable, resolution: u32) -> Result<Self> {
+        Self::from_table(table, resolution, |s| table.reflected_at(s))
+    }
+
     /// The skin `T(s)` at the default resolution and range.
     pub fn skin() -> Self {
         Self::new(
@@ -294,6 +302,64 @@ mod tests {
         let red15 = lut.sample(15.0)[0];
         assert!((0.02..0.04).contains(&red15), "{red15}");
         assert!(SumOfGaussians::skin().transmittance(15.0)[0] < 1e-10);
+    }
+
+    /// A thin slab reflects less than the half-space: the LUT holds the solver's own ratio,
+    /// rises to 1, and agrees with the multipole (Donner and Jensen 2005, diffusion theory, an
+    /// independent method) where diffusion holds: marble and skin2 from 2 and 3 mm (a few transport mean free paths).
+    #[test]
+    fn thin_reflectance_is_the_slab_over_the_half_space() {
+        let skin2 = crate::Dipole::new([0.013, 0.070, 0.145], [1.09, 1.59, 1.79], 1.3).unwrap();
+        let marble = crate::Dipole::new([0.0021, 0.0041, 0.0071], [2.19, 2.62, 3.00], 1.3).unwrap();
+        for (d, from_mm, tol) in [(&marble, 2.0, 0.01), (&skin2, 3.0, 0.03)] {
+            let table = crate::slab_transport(d, TransmittanceLut::TRANSPORT_POINTS, 32.0).unwrap();
+            let lut = TransmittanceLut::thin_reflectance(&table, 2049).unwrap();
+            let solver = crate::SlabSolver::new(d.eta).unwrap();
+            let deep = crate::Multipole::new(*d, 200.0, 20)
+                .unwrap()
+                .total_reflectance();
+            let mut last = [0.0f32; 3];
+            for i in 0..=64 {
+                let s = f64::from(i) * 0.5;
+                let got = lut.sample(s as f32);
+                for c in 0..3 {
+                    assert!(
+                        got[c] >= last[c] - 1e-6 && got[c] <= 1.0,
+                        "s = {s}: {got:?}"
+                    );
+                }
+                last = got;
+            }
+            assert_eq!(lut.sample(0.0), [0.0; 3]);
+            assert!(lut.sample(32.0).iter().all(|v| (v - 1.0).abs() < 1e-2));
+            for s in [1.0, 2.0, 3.0, 5.0] {
+                let got = lut.sample(s as f32);
+                let m = crate::Multipole::new(*d, s, 20)
+                    .unwrap()
+                    .total_reflectance();
+                for c in 0..3 {
+                    let ch = d.channel(c);
+                    let slab = solver.slab(ch.sigma_t_prime, ch.alpha_prime, s).unwrap();
+                    let want = slab.reflected / table.albedo[c];
+                    assert!(
+                        (f64::from(got[c]) - want).abs() < 2e-3,
+                        "{s} mm, {c}: {got:?} vs {want}"
+                    );
+                    if s >= from_mm {
+                        let diffusion = m[c] / deep[c];
+                        assert!(
+                            (want - diffusion).abs() < tol,
+                            "{s} mm, {c}: {want} vs multipole {diffusion}"
+                        );
+                    }
+                }
+            }
+        }
+        // 1 mm of skin1 keeps about half its red albedo, most of its blue.
+        let table =
+            crate::slab_transport(&skin1(), TransmittanceLut::TRANSPORT_POINTS, 32.0).unwrap();
+        let r = table.reflected_at(1.0);
+        assert!((0.45..0.6).contains(&r[0]) && r[2] > 0.9, "{r:?}");
     }
 
     #[test]

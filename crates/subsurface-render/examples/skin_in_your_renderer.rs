@@ -246,14 +246,16 @@ struct MaterialData {
 
 /// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
 /// taps and the bounce gathered per pixel (the transmitted map is a lower-rate evaluation inside
-/// our renderer), and without the diffusion source's shadow shift (a term of our lighting
-/// pass's reflected light, which a caller's forward pass computes its own way).
+/// our renderer), and without the diffusion source's shadow shift and the thin parts'
+/// reflectance (terms of our lighting pass's reflected light, which a caller's forward pass
+/// computes its own way).
 pub fn example_settings(scene: &Scene, width: u32, height: u32) -> RenderSettings {
     let mut s = scene.desc.render.clone();
     s.width = width;
     s.height = height;
     s.transmitted_map.texel_mm = 0.0;
     s.sss.source_shift = false;
+    s.sss.thin_parts = false;
     s
 }
 

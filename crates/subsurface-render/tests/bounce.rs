@@ -30,7 +30,9 @@ fn floor_and_wall(ring: u32) -> Scene {
         far = 2.0
         [render]
         ambient = [0.0, 0.0, 0.0]
-        sss = {{ method = "none" }}
+        # Lambertian: the oracle's wall reflects its albedo, not what a 1 mm sheet of the
+        # default skin medium keeps of it (sss.thin_parts).
+        sss = {{ method = "none", thin_parts = false }}
         transmittance = {{ method = "off" }}
         bounce = {{ ring = {ring} }}
         [[lights]]

@@ -235,6 +235,12 @@ impl FramePlan {
         }
     }
 
+    /// Whether the lighting pass reads the back faces (the thin parts' term): the targets then
+    /// hold them at the frame's size (`LightingTargets::set_back_faces`).
+    pub fn thin_parts(&self) -> bool {
+        self.lighting.terms.0 & crate::passes::overrides::Terms::THIN_PARTS != 0
+    }
+
     /// Writes what the shaders read of the plan into the lights' uniform: the transmitted map's
     /// reduction, the bounce's ring and layer.
     pub fn write_lights(&self, lights: &mut LightsUniform) {

@@ -29,3 +29,4 @@ const BOUNCE_GATHER: u32 = 2u;
 const TERM_BALLISTIC: u32 = 1u;
 const TERM_SINGLE_SCATTERING: u32 = 2u;
 const TERM_SOURCE_SHIFT: u32 = 4u;
+const TERM_THIN_PARTS: u32 = 8u;

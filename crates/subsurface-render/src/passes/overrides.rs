@@ -62,8 +62,11 @@ impl Terms {
     pub const SINGLE_SCATTERING: u32 = 2;
     /// The diffusion source's shadow along the refracted ray (`source_shadow`).
     pub const SOURCE_SHIFT: u32 = 4;
+    /// Thin parts lit from the front reflect what their far face does not let out
+    /// (lighting.wgsl `thin_part_reflectance`, from the back faces' depth).
+    pub const THIN_PARTS: u32 = 8;
     /// Every term.
-    pub const ALL: Self = Self(7);
+    pub const ALL: Self = Self(15);
 
     /// The terms `settings` asks for.
     pub fn of(settings: &crate::settings::RenderSettings) -> Self {
@@ -80,6 +83,12 @@ impl Terms {
                     settings.sss.source_shift
                         && settings.sss.method != crate::settings::SssMethod::None,
                     Self::SOURCE_SHIFT,
+                )
+                // Texture-space diffusion lights its UV maps without the screen's back faces.
+                | bit(
+                    settings.sss.thin_parts
+                        && settings.sss.method != crate::settings::SssMethod::Texture,
+                    Self::THIN_PARTS,
                 ),
         )
     }
@@ -144,6 +153,7 @@ mod tests {
             ("TERM_BALLISTIC", Terms::BALLISTIC),
             ("TERM_SINGLE_SCATTERING", Terms::SINGLE_SCATTERING),
             ("TERM_SOURCE_SHIFT", Terms::SOURCE_SHIFT),
+            ("TERM_THIN_PARTS", Terms::THIN_PARTS),
         ]);
         for (name, value) in &expected {
             assert_eq!(ids.get(*name), Some(value), "{name} in ids.wgsl");

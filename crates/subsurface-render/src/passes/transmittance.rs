@@ -15,7 +15,8 @@ pub use crate::settings::{TransmittanceMethod, TransmittanceSettings};
 /// of the medium seen from that direction (`TransmittanceLut::transport_at`, exit cosines evenly
 /// spaced from grazing to the normal), over `TransmittanceLut::DIFFUSION_S_MAX_MM`; then the
 /// three rows of the lateral taps over the same range: `T_ms(s)`, `-T_ms'(r)` and the rise of
-/// `T_ms` to its peak (`subsurface_profile::lateral`). (The rough boundary's transmittance,
+/// `T_ms` to its peak (`subsurface_profile::lateral`); last, what a slab of each thickness
+/// reflects as a share of the half-space's albedo (`TransmittanceLut::thin_reflectance`). (The rough boundary's transmittance,
 /// once a last row, is a polynomial in the object's uniform: `ObjectUniform::boundary_fit`.)
 pub fn lut_texture(
     ctx: &GpuContext,
@@ -41,6 +42,9 @@ pub fn lut_texture_on(
     rows.push(TransmittanceLut::transport(&optics.transport, res)?.to_rgba());
     rows.push(TransmittanceLut::lateral_slope(&optics.transport, res)?.to_rgba());
     rows.push(TransmittanceLut::rise(&optics.transport, res)?.to_rgba());
+    // What a part of each thickness reflects of the half-space's albedo (the lighting pass's
+    // thin parts, `Terms::THIN_PARTS`).
+    rows.push(TransmittanceLut::thin_reflectance(&optics.transport, res)?.to_rgba());
     let data: Vec<half::f16> = rows
         .iter()
         .flatten()

@@ -81,11 +81,14 @@ fn shadow_texel(light: Light, sc: ShadowCoord) -> vec2<i32> {
 // Must match TransmittanceLut::DIFFUSION_S_MAX_MM (the range of the transport rows, 1..=16).
 const DIFFUSION_RANGE_MM: f32 = 32.0;
 // The LUT's rows (transmittance.rs, `lut_texture`): 0 the sum-of-Gaussians T(s), 1..=16 the
-// transport T(s) per exit direction (SlabSolver::EXIT_ANGLES), then the lateral taps' three.
+// transport T(s) per exit direction (SlabSolver::EXIT_ANGLES), then the lateral taps' three,
+// then the thin parts' reflectance.
 const EXIT_ROWS: f32 = 16.0;
 const FLUX_ROW: f32 = 17.0;
 const SLOPE_ROW: f32 = 18.0;
 const RISE_ROW: f32 = 19.0;
+// What a slab reflects as a share of the half-space's albedo (lighting.wgsl, thin_part_reflectance).
+const THIN_ROW: f32 = 20.0;
 
 // One row of the object's T(s) LUT over 0..range mm, 0 beyond it. `row` is in texels: row 0
 // holds the sum-of-Gaussians T(s), rows 1..=N the transport T(s) per exit direction; a

@@ -262,7 +262,9 @@ impl Renderer {
             &plan,
         );
         let texture_space = TextureSpacePass::new(ctx, scene, &settings, &maps_layout)?;
-        let targets = LightingTargets::with_map(ctx, options.width(), options.height(), plan.map);
+        let mut targets =
+            LightingTargets::with_map(ctx, options.width(), options.height(), plan.map);
+        targets.set_back_faces(ctx, plan.thin_parts());
         let views = target_views(&targets);
         let mut sss = SssPass::new(device, &options.settings.sss, &profiles.kernels)?;
         sss.resize(
@@ -435,6 +437,7 @@ impl Renderer {
         } else if plan.map != self.targets.map_shape() {
             self.targets.set_map(&self.ctx, plan.map);
         }
+        self.targets.set_back_faces(&self.ctx, plan.thin_parts());
         let views = target_views(&self.targets);
         let new_sss = new_profiles || options.settings.sss != self.options.settings.sss;
         if new_sss {

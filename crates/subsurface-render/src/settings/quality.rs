@@ -63,11 +63,15 @@ const MEDIUM: &[(&str, &str)] = &[
 // 40 %). The former `low`, the chords at every pixel with no taps, cost more than `medium` on
 // that GPU (27 % of the frame against 22 %); four taps instead of eight left the suite's
 // wedge at +301 % on its light-side outline.
+// Nor the thin parts' reflectance: their back faces' pass cost 8 ms of lavapipe's 175 at
+// 1280x720 (about the depth pre-pass's), for a term that moves no canonical region and three
+// of the suite's front-lit thin ones (docs/lab/suite.md, session 31).
 const LOW: &[(&str, &str)] = &[
     ("sss.samples", "7"),
     ("sss.jitter", "true"),
     ("transmittance.thickness_filter", "1"),
     ("transmittance.lateral_taps", "8"),
     ("transmittance.single_scattering", "false"),
+    ("sss.thin_parts", "false"),
     ("bounce.ring", "0"),
 ];

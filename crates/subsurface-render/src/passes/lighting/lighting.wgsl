@@ -116,6 +116,39 @@ struct TextureSpace {
 // radiance summed, a = the texel's view depth (0: nothing there); the bounce's layer after
 // them. Group 3 of the lighting pass; the map and bounce passes have no group 3.
 @group(3) @binding(0) var transmitted_map: texture_2d_array<f32>;
+// The nearest back face per pixel (lighting/targets.rs, BACK_FACES_FORMAT): r = its linear
+// view depth (0: none), g = its outward normal (encode_normal). Written by `fs_back_faces`
+// where the pipeline's terms hold TERM_THIN_PARTS.
+@group(3) @binding(1) var back_faces: texture_2d<f32>;
+
+// The back faces' pass (front faces culled, the nearest kept).
+@fragment
+fn fs_back_faces(in: LitVarying) -> @location(0) vec2<f32> {
+    return vec2<f32>(dot(in.world - camera.position, camera.forward), encode_normal(normalize(in.normal)));
+}
+
+// A part thinner than a few diffusion lengths lets out through its far face some of the light
+// its lit face takes in, so it reflects less than the half-space the albedo is measured on
+// (2 mm of skin1 keep 0.75 of the red; a 1 mm slab of the suite's jade-like medium lit from
+// the side read +64 % against the path tracer without it). The thickness along the normal is
+// the view ray's chord to the nearest back face times |n.v|, exact for a slab seen at any
+// angle; divided by how squarely the back face looks away from the front, so that a thick
+// sphere's or finger's rim, whose back face is the same surface curving away (a short chord
+// between faces that look the same way), keeps its reflectance instead of reading as a sheet:
+// through a sphere the estimate never falls below the diameter.
+fn thin_part_reflectance(pixel: vec2<f32>, depth: f32, world: vec3<f32>, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let texel = textureLoad(back_faces, vec2<i32>(pixel), 0).rg;
+    let across = -dot(n, decode_normal(texel.y));
+    if (!(texel.x > depth) || !(depth > 0.0) || across <= 0.0 || object.world_per_mm <= 0.0) {
+        return vec3<f32>(1.0);
+    }
+    let chord = length(camera.position - world) * (texel.x / depth - 1.0);
+    let s_mm = chord * abs(dot(n, v)) / (across * object.world_per_mm);
+    if (!(s_mm < DIFFUSION_RANGE_MM)) {
+        return vec3<f32>(1.0);
+    }
+    return lut_row(s_mm, DIFFUSION_RANGE_MM, THIN_ROW);
+}
 
 fn oriented_normal(in: LitVarying, front: bool) -> vec3<f32> {
     let n = normalize(in.normal);
@@ -275,7 +308,13 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         // are blurred together (000_*).
         // The bounce is light arriving like the lights' own: it enters and diffuses too.
         let bounce = pixel_bounce(in.world, n_vertex, screen);
-        out.diffuse = vec4<f32>(albedo * (s.irradiance + lights.ambient + s.transmitted + s.tsm + bounce), 1.0);
+        // Light arriving at the front face (the lights, the ambient, the bounce) is what a thin
+        // part lets out through its back; light transmitted from behind has its own T(s).
+        var thin = vec3<f32>(1.0);
+        if (has_term(TERM_THIN_PARTS) && object.sss_strength > 0.0) {
+            thin = thin_part_reflectance(in.clip.xy, depth, in.world, n_vertex, v);
+        }
+        out.diffuse = vec4<f32>(albedo * ((s.irradiance + lights.ambient + bounce) * thin + s.transmitted + s.tsm), 1.0);
     }
     if (lights.thickness_view != 0u) {
         // Thickness debug view (tonemap.wgsl reads it back from diffuse.r).

@@ -13,17 +13,22 @@
 //! Group 0 (camera, lights, shadow maps, translucent shadow maps, flux pyramid; declared in
 //! bindings/frame.wgsl) is built by [`frame_layout`]; group 1 is the object's
 //! (`gpu::object::object_layout`, bindings/object.wgsl), group 2 the
-//! object's texture-space maps ([`maps::maps_layout`]), group 3 the transmitted map
-//! ([`screen_layout`]). The texture-space pass draws its UV-space irradiance with the same
+//! object's texture-space maps ([`maps::maps_layout`]), group 3 the transmitted map and the
+//! back faces ([`screen_layout`]).
+//!
+//! Where the plan's terms hold the thin parts (`FramePlan::thin_parts`), a depth pass of the back faces runs before
+//! the pre-pass: the nearest back face per pixel, from which the lighting shader measures how
+//! thick the part under each pixel is (`thin_part_reflectance`). The texture-space pass draws its UV-space irradiance with the same
 //! groups (`texture_space::irradiance`), group 3 being [`LightingPass::no_transmitted_map`].
 
 mod outline;
 mod targets;
 
 pub use targets::{
-    DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout, zbuffer_format,
+    BACK_FACES_FORMAT, DEPTH_FORMAT, LightingTargets, RADIANCE_FORMAT, SSS_FORMAT, screen_layout,
+    zbuffer_format,
 };
-use targets::{dummy_transmitted_map, screen_bind_group};
+use targets::{dummy_transmitted_map, no_back_faces, screen_bind_group};
 
 use wgpu::util::DeviceExt;
 
@@ -182,6 +187,10 @@ fn variant_constants(variant: LightingVariant) -> [(&'static str, f64); 5] {
 pub struct LightingPass {
     /// Depth only, the lighting shader's vertex stage: the nearest surface per pixel.
     prepass: wgpu::RenderPipeline,
+    /// Front faces culled: the nearest back face's depth and normal per pixel (`fs_back_faces`).
+    back_faces: wgpu::RenderPipeline,
+    /// Whether the plan's terms hold the thin parts, which read the back faces.
+    thin_parts: bool,
     /// `fs_main` built per [`LightingVariant`], each kept once built: switching methods back
     /// and forth in the viewer compiles each once.
     pipelines: Vec<(LightingVariant, wgpu::RenderPipeline)>,
@@ -289,9 +298,25 @@ impl LightingPass {
             "vs_main",
             zbuffer_format(device),
         );
+        let back_faces = util::MeshPipeline {
+            label: "back faces",
+            layout: &prepass_layout,
+            module: &module,
+            vertex: "vs_main",
+            fragment: "fs_back_faces",
+            targets: &[BACK_FACES_FORMAT],
+            cull_mode: Some(wgpu::Face::Front),
+            depth: util::DepthTest::Nearest,
+            stencil: None,
+            constants: &[],
+            blend: None,
+        }
+        .create(device);
         let default_maps = maps::default_maps_bind_group(device, maps_layout);
         let mut pass = Self {
             prepass,
+            back_faces,
+            thin_parts: plan.thin_parts(),
             pipelines: vec![(plan.lighting, pipeline)],
             taps: None,
             taps_objects: Vec::new(),
@@ -300,7 +325,11 @@ impl LightingPass {
             module,
             layout,
             map,
-            no_transmitted_map: screen_bind_group(device, &dummy_transmitted_map(device)),
+            no_transmitted_map: screen_bind_group(
+                device,
+                &dummy_transmitted_map(device),
+                &no_back_faces(device),
+            ),
             default_maps,
             frame_bind_group,
             camera,
@@ -336,6 +365,7 @@ impl LightingPass {
         ctx.queue
             .write_buffer(&self.lights, 0, bytemuck::bytes_of(lights));
         self.current = self.pipeline_index(&ctx.device, plan.lighting);
+        self.thin_parts = plan.thin_parts();
         self.set_taps_objects(&ctx.device, plan);
         self.set_outline(&ctx.device, plan);
         self.map.prepare(&ctx.device, plan);
@@ -426,6 +456,45 @@ impl LightingPass {
         timer.end(profiler, encoder);
     }
 
+    /// The back faces' pass into `targets.back_faces` (cleared to 0: no back face), timed as
+    /// "back faces".
+    fn encode_back_faces(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &LightingTargets,
+        objects: &[GpuObject],
+        maps: &[wgpu::BindGroup],
+        profiler: Option<&wgpu_profiler::GpuProfiler>,
+    ) {
+        let view = targets.back_faces.create_view(&Default::default());
+        let timer = TimedPass::begin(profiler, "back faces", encoder);
+        {
+            let mut pass = util::render_pass(
+                encoder,
+                "back faces",
+                &[util::color_attachment(
+                    &view,
+                    wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                )],
+                util::depth_attachment(
+                    &targets.back_zbuffer,
+                    wgpu::LoadOp::Clear(1.0),
+                    wgpu::StoreOp::Discard,
+                ),
+                timer.writes(),
+            );
+            util::draw_objects(
+                &mut pass,
+                &self.back_faces,
+                &self.frame_bind_group,
+                objects,
+                maps,
+                &self.default_maps,
+            );
+        }
+        timer.end(profiler, encoder);
+    }
+
     /// The transmitted map's passes where the plan has them, the depth pre-pass and the lighting
     /// pass into `targets`, with each object's texture-space bind group (`maps[i]` for
     /// `objects[i]`; objects beyond `maps` are lit plainly).
@@ -467,6 +536,11 @@ impl LightingPass {
             b: background[2] as f64,
             a: 1.0,
         };
+        // Targets without them (made for another plan) hold a stand-in that reads as no back
+        // face: the term then changes nothing rather than reading garbage.
+        if self.thin_parts && targets.back_faces_on() {
+            self.encode_back_faces(encoder, targets, objects, maps, profiler);
+        }
         self.encode_prepass(
             encoder,
             &targets.zbuffer,
