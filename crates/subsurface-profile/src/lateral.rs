@@ -109,14 +109,24 @@ impl TransportTable {
     }
 
     fn segment(&self, s_mm: f64) -> Option<([f64; 3], [f64; 3], f64)> {
+        self.segment_of(&self.multiple, s_mm)
+    }
+
+    /// The two rows of `rows` (one per solved thickness, as `multiple`) around `s_mm` and the
+    /// fraction between them.
+    pub(crate) fn segment_of(
+        &self,
+        rows: &[[f64; 3]],
+        s_mm: f64,
+    ) -> Option<([f64; 3], [f64; 3], f64)> {
         // NaN, negative and past the table all read nothing.
         if s_mm.is_nan() || s_mm < 0.0 || s_mm > self.s_max_mm {
             return None;
         }
-        let points = self.multiple.len();
+        let points = rows.len();
         let x = (s_mm / self.step_mm()).min((points - 1) as f64);
         let k = (x.floor() as usize).min(points - 2);
-        Some((self.multiple[k], self.multiple[k + 1], x - k as f64))
+        Some((rows[k], rows[k + 1], x - k as f64))
     }
 }
 

@@ -125,18 +125,13 @@ impl TransportTable {
     /// [`TransportTable::reflected`] at `s_mm`, interpolated; 1 past the table (a part that
     /// thick reflects as the half-space), 0 for NaN or a negative thickness.
     pub fn reflected_at(&self, s_mm: f64) -> [f64; 3] {
-        if s_mm.is_nan() || s_mm < 0.0 {
-            return [0.0; 3];
-        }
         if s_mm >= self.s_max_mm {
             return [1.0; 3];
         }
-        let last = self.reflected.len() - 1;
-        let x = s_mm / self.s_max_mm * last as f64;
-        let k = (x.floor() as usize).min(last - 1);
-        let f = x - k as f64;
-        let (a, b) = (self.reflected[k], self.reflected[k + 1]);
-        [0, 1, 2].map(|c| a[c] + (b[c] - a[c]) * f)
+        self.segment_of(&self.reflected, s_mm)
+            .map_or([0.0; 3], |(a, b, f)| {
+                [0, 1, 2].map(|c| a[c] + (b[c] - a[c]) * f)
+            })
     }
 }
 

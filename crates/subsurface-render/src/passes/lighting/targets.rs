@@ -210,14 +210,7 @@ impl LightingTargets {
             (1, 1)
         };
         (self.back_faces, self.back_zbuffer) = back_face_targets(&ctx.device, w, h);
-        self.screen = match &self.map {
-            Some(l) => screen_bind_group(&ctx.device, &l.map, &self.back_faces),
-            None => screen_bind_group(
-                &ctx.device,
-                &dummy_transmitted_map(&ctx.device),
-                &self.back_faces,
-            ),
-        };
+        self.screen = screen_of(&ctx.device, self.map.as_ref(), &self.back_faces);
     }
 
     /// A new transmitted map of `map`'s shape, the other targets kept: the reduction follows
@@ -258,11 +251,20 @@ fn map_targets(
     let device = &ctx.device;
     let map = (shape.downsample > 1 && shape.layers > 0)
         .then(|| TransmittedMapTargets::new(ctx, width, height, shape));
-    let screen = match &map {
+    let screen = screen_of(device, map.as_ref(), back_faces);
+    (map, screen)
+}
+
+/// Group 3 reading `map` (a 1x1 stand-in without one) and `back_faces`.
+fn screen_of(
+    device: &wgpu::Device,
+    map: Option<&TransmittedMapTargets>,
+    back_faces: &wgpu::Texture,
+) -> wgpu::BindGroup {
+    match map {
         Some(l) => screen_bind_group(device, &l.map, back_faces),
         None => screen_bind_group(device, &dummy_transmitted_map(device), back_faces),
-    };
-    (map, screen)
+    }
 }
 
 /// The lighting pass's z-buffer, shared by the depth pre-pass, the lighting pass and the
