@@ -1,0 +1,301 @@
+#!/usr/bin/env python3
+"""How much light a backlit curved part lets through, against a slab as thick as its chord.
+
+    python3 tools/reference/confinement_mc.py [--media skin1,skin2] [--radii 3,5,8]
+        [--shapes cylinder,sphere] [--channels 0,1] [--photons 500000] [--out FILE.json]
+
+A Monte Carlo random walk (numpy) in a homogeneous medium with a smooth dielectric boundary
+and an isotropic phase function, sigma_s' used as sigma_s as the exporter does (similarity
+relation). A collimated beam lights the part from behind along +u; the score is the radiance
+leaving the front pole toward +u (directions within `--cone` of it, through a window of
+`--window` mm), per unit of the beam's cross-section. The same is done for a slab whose
+thickness is the part's diameter. Their ratio is the part's confinement against the chord's
+slab: what the renderer's chord term, which reads a slab table, would have to be multiplied
+by at the middle of a backlit rod or ball.
+
+Why it exists (docs/lab/suite.md, session 32): the path tracer's references of backlit rods
+(the calibration set) showed the chord's slab too bright by 1.35-1.65x in skin2 and by about
+1.0-1.17x in skin1 at the same 10 mm; a quantity that predicts that difference had not been
+found. This walk reproduces it in seconds per point, for any sigma_a, sigma_s' and radius,
+without the path tracer's hours, so a correction can be fitted against physics rather than
+against the suite it is tested on.
+"""
+
+import argparse
+import functools
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+
+# sigma_s', sigma_a per mm (Jensen et al. 2001; materials.rs) and the boundary's index.
+MEDIA = {
+    "skin1": ([0.74, 0.88, 1.01], [0.032, 0.17, 0.48], 1.3),
+    "skin2": ([1.09, 1.59, 1.79], [0.013, 0.070, 0.145], 1.3),
+    "marble": ([2.19, 2.62, 3.00], [0.0021, 0.0041, 0.0071], 1.3),
+    "chicken1": ([0.15, 0.21, 0.38], [0.015, 0.077, 0.19], 1.3),
+    "custom": ([0.6, 0.9, 0.7], [0.12, 0.025, 0.08], 1.5),
+}
+
+
+def fresnel_out(cos_i, eta):
+    """Reflectance and cos of the transmitted angle leaving a medium of index eta."""
+    sin_t2 = eta * eta * (1.0 - cos_i * cos_i)
+    cos_t = np.sqrt(np.maximum(1.0 - sin_t2, 0.0))
+    rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t + 1e-12)
+    rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t + 1e-12)
+    r = 0.5 * (rs * rs + rp * rp)
+    r[sin_t2 >= 1.0] = 1.0
+    return r, cos_t
+
+
+def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed):
+    """Radiance toward +u at the front pole, per unit of beam cross-section (arbitrary units,
+    the same for every shape)."""
+    rng = np.random.default_rng(seed)
+    n = photons
+    sigma_t = sigma_s + sigma_a
+    albedo = sigma_s / sigma_t
+    # Where the beam enters, and the outward normal there. Coordinates: u along the beam, v
+    # across it, w along a cylinder's axis.
+    if shape == "slab":
+        half = 8.0 * radius
+        v = rng.uniform(-half, half, n)
+        w = np.zeros(n)
+        u = np.full(n, -radius)
+        beam_area, window_area = 2.0 * half, 2.0 * window
+        normal = np.tile([-1.0, 0.0, 0.0], (n, 1))
+    elif shape == "cylinder":
+        v = rng.uniform(-radius, radius, n)
+        w = np.zeros(n)
+        u = -np.sqrt(radius * radius - v * v)
+        beam_area, window_area = 2.0 * radius, 2.0 * window
+        normal = np.stack([u, v, w], 1) / radius
+    else:
+        rr = radius * np.sqrt(rng.random(n))
+        ph = rng.uniform(0.0, 2.0 * np.pi, n)
+        v, w = rr * np.cos(ph), rr * np.sin(ph)
+        u = -np.sqrt(np.maximum(radius * radius - rr * rr, 0.0))
+        beam_area, window_area = np.pi * radius * radius, (2.0 * window) ** 2
+        normal = np.stack([u, v, w], 1) / radius
+    pos = np.stack([u, v, w], 1)
+    cos_i = -normal[:, 0]
+    sin_t = np.sqrt(np.maximum(1.0 - cos_i * cos_i, 0.0)) / eta
+    cos_t = np.sqrt(1.0 - sin_t * sin_t)
+    rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    weight = 1.0 - 0.5 * (rs * rs + rp * rp)
+    incident = np.tile([1.0, 0.0, 0.0], (n, 1))
+    d = incident / eta + (cos_i / eta - cos_t)[:, None] * normal
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    alive = np.ones(n, bool)
+    # Light that leaves unscattered is not the diffusion this measures: the renderer's
+    # unscattered lobe is a term of its own (and a delta beam has no radiance to compare).
+    scattered = np.zeros(n, bool)
+    # Ten interleaved batches give the estimate's standard error.
+    score = np.zeros(10)
+    while True:
+        idx = np.nonzero(alive)[0]
+        if idx.size == 0:
+            break
+        p, dd = pos[idx], d[idx]
+        t = -np.log(rng.random(idx.size)) / sigma_t
+        if shape == "slab":
+            t_b = np.where(dd[:, 0] > 0, (radius - p[:, 0]) / np.maximum(dd[:, 0], 1e-30),
+                           (-radius - p[:, 0]) / np.minimum(dd[:, 0], -1e-30))
+        else:
+            axes = 2 if shape == "cylinder" else 3
+            a = np.sum(dd[:, :axes] ** 2, 1)
+            b = 2.0 * np.sum(p[:, :axes] * dd[:, :axes], 1)
+            c = np.sum(p[:, :axes] ** 2, 1) - radius * radius
+            t_b = (-b + np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))) / (2 * a + 1e-30)
+        hit = t_b < t
+        sc = idx[~hit]
+        pos[sc] += d[sc] * t[~hit][:, None]
+        weight[sc] *= albedo
+        scattered[sc] = True
+        mu = rng.uniform(-1.0, 1.0, sc.size)
+        ph = rng.uniform(0.0, 2.0 * np.pi, sc.size)
+        s = np.sqrt(1.0 - mu * mu)
+        d[sc] = np.stack([mu, s * np.cos(ph), s * np.sin(ph)], 1)
+        low = sc[weight[sc] < 1e-3]
+        if low.size:
+            keep = rng.random(low.size) < 0.1
+            weight[low[keep]] *= 10.0
+            alive[low[~keep]] = False
+        hb = idx[hit]
+        pos[hb] += d[hb] * t_b[hit][:, None]
+        pb = pos[hb]
+        if shape == "slab":
+            nb = np.zeros_like(pb)
+            nb[:, 0] = np.sign(pb[:, 0])
+        elif shape == "cylinder":
+            nb = pb.copy()
+            nb[:, 2] = 0.0
+            nb /= radius
+        else:
+            nb = pb / radius
+        ci = np.clip(np.sum(d[hb] * nb, 1), 0.0, 1.0)
+        refl_p, ct = fresnel_out(ci, eta)
+        refl = rng.random(hb.size) < refl_p
+        r = hb[refl]
+        d[r] -= 2.0 * ci[refl][:, None] * nb[refl]
+        pos[r] -= nb[refl] * 1e-7
+        out = hb[~refl]
+        d_out = eta * d[out] + (ct[~refl] - eta * ci[~refl])[:, None] * nb[~refl]
+        seen = (d_out[:, 0] > cone) & (pos[out, 0] > 0.0) & scattered[out]
+        if shape == "slab":
+            # Any point of the slab's front face sees the same light: score all of them.
+            window_area = beam_area
+        else:
+            seen &= np.abs(pos[out, 1]) < window
+        if shape == "sphere":
+            seen &= np.abs(pos[out, 2]) < window
+        score += np.bincount(out[seen] % 10, weights=weight[out[seen]], minlength=10)
+        alive[out] = False
+    per_batch = score / (n / 10) * beam_area / window_area
+    return per_batch.mean(), per_batch.std(ddof=1) / np.sqrt(10)
+
+
+SCENE = """[camera]
+position = [0.0, 0.0, 0.2]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = {fov}
+near = 0.05
+far = 2.0
+
+[render]
+width = 128
+height = 128
+ambient = [0.0, 0.0, 0.0]
+background = [0.0, 0.0, 0.0]
+transmittance = {{ normal_shrink = 0.0005 }}
+
+[[lights]]
+kind = "spot"
+position = [0.0, 0.0, -0.35]
+target = [0.0, 0.0, 0.0]
+intensity = 3.675
+inner_angle_deg = 9.0
+outer_angle_deg = 14.0
+shadow_map_size = 2048
+shadow_bias = 0.0005
+
+[[objects]]
+name = "part"
+mesh = {mesh}
+mm_per_unit = 1000.0
+
+[objects.material]
+medium = {{ sigma_a = {sa}, sigma_s = {ss}, eta = {eta} }}
+use_gltf_color = false
+roughness = 0.3
+specular = 1.0
+"""
+
+
+@functools.lru_cache(maxsize=None)
+def renderer_centre(medium, shape, radius, extra):
+    """The renderer's linear radiance (R, G, B) at the middle of the part, seen from the
+    front with the light straight behind it: `subsurface compare --linear` on a 128 x 128
+    frame 4 R wide, read over the pixels whose chord is within 1 % of the diameter (a
+    cylinder's axis runs up the frame)."""
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    ss, sa, eta = MEDIA[medium]
+    m = radius / 1000.0
+    mesh = {"slab": f'{{ shape = "slab", width = {16 * m}, height = {16 * m}, thickness = {2 * m} }}',
+            "cylinder": f'{{ shape = "cylinder", radius = {m}, length = {24 * m}, segments = 256 }}',
+            "sphere": f'{{ shape = "sphere", radius = {m}, segments = 192 }}'}[shape]
+    fov = 2.0 * np.degrees(np.arctan(2.0 * m / 0.2))
+    exe = os.environ.get("SUBSURFACE_BIN") or os.path.join(ROOT, "target", "release", "subsurface")
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = os.path.join(tmp, "part.toml")
+        with open(scene, "w") as f:
+            f.write(SCENE.format(fov=fov, mesh=mesh, sa=list(sa), ss=list(ss), eta=eta))
+        # compare wants a reference of the frame's size; any one does, its figures are unused.
+        ref = os.path.join(tmp, "ref.exr")
+        mi.Bitmap(np.zeros((128, 128, 3), dtype=np.float32)).write(ref)
+        out = os.path.join(tmp, "linear.exr")
+        # The diffuse light alone: the unscattered and once-scattered terms are the renderer's
+        # own, apart from the diffusion the walk scores.
+        r = subprocess.run([exe, "compare", ref, scene, "--linear", out, "--out", os.path.join(tmp, "x.png"),
+                            "--sss", "none", "--set", "transmittance.ballistic=false",
+                            "--set", "transmittance.single_scattering=false"] + list(extra),
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit(f"error: {exe} compare: {r.stderr.strip()}")
+        img = np.array(mi.Bitmap(out))[..., :3]
+    # The frame spans 4 R: pixel x sees x' = (x + 0.5 - 64) R / 32; |x'| <= 0.14 R keeps the
+    # chord within 1 % of the diameter.
+    half = 4
+    rows = slice(32, 96) if shape == "cylinder" else slice(64 - half, 64 + half)
+    return img[rows, 64 - half:64 + half].reshape(-1, 3).mean(0)
+
+
+def point(job):
+    medium, shape, radius, channel, a, seed = job
+    ss, sa, eta = MEDIA[medium]
+    part, part_se = walk(shape, radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone, seed)
+    slab, slab_se = walk("slab", radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone, seed + 1)
+    ratio = part / slab if slab > 0 else None
+    ratio_se = ratio * np.hypot(part_se / part, slab_se / slab) if ratio and part > 0 else None
+    ours = None
+    if a.renderer:
+        extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
+        p = renderer_centre(medium, shape, radius, extra)[channel]
+        q = renderer_centre(medium, "slab", radius, extra)[channel]
+        ours = float(p / q) if q > 0 else None
+    return {"medium": medium, "shape": shape, "radius_mm": radius, "channel": "RGB"[channel],
+            "sigma_s_prime": ss[channel], "sigma_a": sa[channel],
+            "sigma_tr": float(np.sqrt(3 * sa[channel] * (sa[channel] + ss[channel]))),
+            "part": part, "slab": slab, "ratio": ratio, "ratio_stderr": ratio_se, "renderer_ratio": ours}
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--media", default="skin1,skin2")
+    p.add_argument("--radii", default="3,5,8", help="mm, comma-separated")
+    p.add_argument("--shapes", default="cylinder,sphere")
+    p.add_argument("--channels", default="0,1", help="0 red, 1 green, 2 blue")
+    p.add_argument("--photons", type=int, default=500000)
+    p.add_argument("--window", type=float, default=0.5, help="half-width of the scored window, mm")
+    p.add_argument("--cone", type=float, default=0.97, help="cos of the scored cone around +u")
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--renderer", action="store_true",
+                   help="also render the part and the slab with the renderer (SUBSURFACE_BIN or "
+                        "target/release/subsurface, --sss none) and give its ratio beside the walk's")
+    p.add_argument("--renderer-args", default="", help="extra arguments to the renderer, e.g. '--quality high'")
+    p.add_argument("--out", default="", help="write the points as JSON here")
+    a = p.parse_args()
+    for m in a.media.split(","):
+        if m not in MEDIA:
+            sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
+    jobs = [(m, s, float(r), int(c), a, 1000 * i)
+            for i, (m, s, r, c) in enumerate((m, s, r, c) for m in a.media.split(",")
+                                             for s in a.shapes.split(",") for r in a.radii.split(",")
+                                             for c in a.channels.split(","))]
+    points = []
+    with ProcessPoolExecutor(a.jobs) as ex:
+        for pt in ex.map(point, jobs):
+            points.append(pt)
+            ratio = "-" if pt["ratio"] is None else f"{pt['ratio']:.2f} +- {pt['ratio_stderr']:.2f}"
+            if pt["renderer_ratio"] is not None:
+                ratio += f"  renderer {pt['renderer_ratio']:.2f}"
+            print(f"{pt['medium']:9} {pt['shape']:8} R {pt['radius_mm']:4.1f} mm {pt['channel']}  "
+                  f"sigma_tr R {pt['sigma_tr'] * pt['radius_mm']:5.2f}  part {pt['part']:.3g}  "
+                  f"slab {pt['slab']:.3g}  ratio {ratio}", flush=True)
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump({"photons": a.photons, "window_mm": a.window, "cone": a.cone, "points": points}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
