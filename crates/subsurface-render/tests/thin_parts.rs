@@ -6,9 +6,9 @@
 
 mod common;
 
-use common::{camera_toml, context, dark_scene, light_toml, options};
+use common::{camera_toml, context, dark_scene, diffuse_with, light_toml};
 use subsurface_profile::{Dipole, SlabSolver};
-use subsurface_render::{Renderer, Scene, SssMethod};
+use subsurface_render::{Scene, SssMethod};
 
 /// Jensen et al. 2001's skin1, 1/mm.
 const SKIN1_SIGMA_A: [f64; 3] = [0.032, 0.17, 0.48];
@@ -47,13 +47,10 @@ fn front_lit(mesh: &str, tilt_deg: f32, camera_z: f32) -> Scene {
 /// The diffuse target (irradiance x albedo, no blur) of `scene` at 64 x 64, with the thin
 /// parts' term on or off.
 fn diffuse(scene: &Scene, thin_parts: bool) -> Vec<[f32; 4]> {
-    let ctx = context().unwrap();
-    let mut opts = options(scene, 64, 64);
-    opts.settings.sss.method = SssMethod::None;
-    opts.settings.sss.thin_parts = thin_parts;
-    let mut r = Renderer::new(&ctx, scene, opts).unwrap();
-    r.render().unwrap();
-    r.read_diffuse().unwrap()
+    diffuse_with(scene, 64, 64, |s| {
+        s.sss.method = SssMethod::None;
+        s.sss.thin_parts = thin_parts;
+    })
 }
 
 fn slab(thickness_m: f32) -> String {

@@ -30,3 +30,4 @@ const TERM_BALLISTIC: u32 = 1u;
 const TERM_SINGLE_SCATTERING: u32 = 2u;
 const TERM_SOURCE_SHIFT: u32 = 4u;
 const TERM_THIN_PARTS: u32 = 8u;
+const TERM_SIDE_WALLS: u32 = 16u;

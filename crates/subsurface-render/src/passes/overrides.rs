@@ -65,8 +65,11 @@ impl Terms {
     /// Thin parts lit from the front reflect what their far face does not let out
     /// (lighting.wgsl `thin_part_reflectance`, from the back faces' depth).
     pub const THIN_PARTS: u32 = 8;
+    /// The side walls of a part narrower than the light's spread take their share of the
+    /// chord's light (transmittance.wgsl `side_wall_share`).
+    pub const SIDE_WALLS: u32 = 16;
     /// Every term.
-    pub const ALL: Self = Self(15);
+    pub const ALL: Self = Self(31);
 
     /// The terms `settings` asks for.
     pub fn of(settings: &crate::settings::RenderSettings) -> Self {
@@ -75,6 +78,7 @@ impl Terms {
         Self(
             bit(t.ballistic, Self::BALLISTIC)
                 | bit(t.single_scattering, Self::SINGLE_SCATTERING)
+                | bit(t.side_walls, Self::SIDE_WALLS)
                 // Without a blur the shift has nothing to feed (the shader tests it at run time
                 // too), but code a pipeline holds costs even where it does not run: on
                 // llvmpipe, whose branches mask rather than jump, the unreached lookups were a
@@ -154,6 +158,7 @@ mod tests {
             ("TERM_SINGLE_SCATTERING", Terms::SINGLE_SCATTERING),
             ("TERM_SOURCE_SHIFT", Terms::SOURCE_SHIFT),
             ("TERM_THIN_PARTS", Terms::THIN_PARTS),
+            ("TERM_SIDE_WALLS", Terms::SIDE_WALLS),
         ]);
         for (name, value) in &expected {
             assert_eq!(ids.get(*name), Some(value), "{name} in ids.wgsl");

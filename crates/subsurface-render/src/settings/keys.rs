@@ -49,6 +49,7 @@ pub const SETTINGS: &[SettingDoc] = &[
     doc("transmittance.lateral_taps", "taps", "diffusion: lit-surface taps around the chord, 0..=32"),
     doc("transmittance.ballistic", "", "diffusion: unscattered light through thin parts"),
     doc("transmittance.single_scattering", "", "diffusion: light scattered once through thin parts"),
+    doc("transmittance.side_walls", "", "diffusion: the sides of narrow parts take their share of the light through them"),
     doc("transmitted_map.texel_mm", "mm", "diffusion and bounce: map texel on the skin, 0..=50 (0: per pixel)"),
     doc("transmitted_map.pass", "", "diffusion and bounce: compute or fragment evaluation of the map"),
     doc("transmitted_map.outlines", "", "diffusion: chords where the map misses, in the lighting pass or a pass (same image)"),
@@ -247,9 +248,9 @@ impl RenderSettings {
             k if k.starts_with("sss.texture_") => sss == SssMethod::Texture,
             "transmittance.lateral_taps" => t == TransmittanceMethod::Diffusion,
             k if k.starts_with("transmitted_map.") => t == TransmittanceMethod::Diffusion,
-            "transmittance.ballistic" | "transmittance.single_scattering" => {
-                t == TransmittanceMethod::Diffusion
-            }
+            "transmittance.ballistic"
+            | "transmittance.single_scattering"
+            | "transmittance.side_walls" => t == TransmittanceMethod::Diffusion,
             "transmittance.method" => true,
             k if k.starts_with("transmittance.") => t != TransmittanceMethod::Off,
             "bounce.cell_mm" => self.bounce.enabled(),

@@ -93,6 +93,10 @@ pub struct TransmittanceSettings {
     /// `diffusion`: light scattered once on its way through a thin part (Jensen et al.
     /// 2001's single-scattering term, which diffusion leaves out).
     pub single_scattering: bool,
+    /// `diffusion`: the sides of a part narrower than the light's spread (a rod, a ball, lit
+    /// from behind) take their share of the chord's light, by the method of images; without
+    /// it, the share of the lateral taps' kernel that the part covers.
+    pub side_walls: bool,
 }
 
 impl Default for TransmittanceSettings {
@@ -104,6 +108,7 @@ impl Default for TransmittanceSettings {
             lateral_taps: subsurface_profile::lateral::DEFAULT_LATERAL_TAPS,
             ballistic: true,
             single_scattering: true,
+            side_walls: true,
         }
     }
 }

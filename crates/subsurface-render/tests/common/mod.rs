@@ -95,6 +95,23 @@ pub fn options(scene: &Scene, width: u32, height: u32) -> RenderOptions {
     o
 }
 
+/// The diffuse target (irradiance x albedo, before any blur is applied by the caller's
+/// settings) of one frame of `scene` at `width` x `height`, at `Quality::High` with `edit`
+/// applied to the settings.
+pub fn diffuse_with(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    edit: impl FnOnce(&mut subsurface_render::RenderSettings),
+) -> Vec<[f32; 4]> {
+    let ctx = context().unwrap();
+    let mut opts = options(scene, width, height);
+    edit(&mut opts.settings);
+    let mut r = subsurface_render::Renderer::new(&ctx, scene, opts).unwrap();
+    r.render().unwrap();
+    r.read_diffuse().unwrap()
+}
+
 /// `scene`'s settings at `Quality::High`: every term of the renderer, each checked here
 /// against its oracle (the cheaper presets are held to the path tracer by subsurface-cli's
 /// tests/fidelity.rs). The scene file's keys and a test's own edits of the settings are kept.
