@@ -353,6 +353,13 @@ fn lateral_transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec
     return lateral_tap_sum(light, p, n_vertex, l, s_mm, 0u, 1u) * lut_row(s_mm, DIFFUSION_RANGE_MM, RISE_ROW);
 }
 
+// Two unit vectors across the light's direction `l`: the lateral taps' and the walls' plane.
+fn across_light(l: vec3<f32>) -> mat2x3<f32> {
+    let a = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(l.y) > 0.9);
+    let t1 = normalize(cross(l, a));
+    return mat2x3<f32>(t1, cross(l, t1));
+}
+
 // The taps `first`, `first + stride`, ... of `lateral_transmittance`'s sum, before its factor
 // of the chord's rise: invocations that share a texel each take a stride of the taps, so that
 // the texel waits for a few of their shadow-map loads in turn rather than for all of them.
@@ -363,10 +370,9 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     let taps = min(lights.lateral_taps, 32u);
     let units_per_mm = object.world_per_mm * object.translucency;
     let shrunk = p - n_vertex * lights.normal_shrink;
-    // A frame across the light.
-    let a = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(l.y) > 0.9);
-    let t1 = normalize(cross(l, a));
-    let t2 = cross(l, t1);
+    let across = across_light(l);
+    let t1 = across[0];
+    let t2 = across[1];
     let chord = max(s_mm, 1.0);
     // Loop invariants and recurrences rather than per-tap transcendentals: this loop is most
     // of the map pass (lavapipe, 640x360: 12 taps cost 0.7 ms each, the rest of the pass 8).
@@ -468,11 +474,10 @@ fn shadow_covered(light: Light, q: vec3<f32>) -> bool {
 fn side_wall_share(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, s_mm: f32) -> vec3<f32> {
     let units_per_mm = object.world_per_mm * object.translucency;
     let shrunk = p - n_vertex * lights.normal_shrink;
-    let a = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(l.y) > 0.9);
-    let t1 = normalize(cross(l, a));
-    let t2 = cross(l, t1);
-    // extinction is sigma_a + sigma_s' (gpu_scene.rs), so sigma_a is what the scattering leaves.
-    let sigma_t = object.extinction;
+    let across = across_light(l);
+    let t1 = across[0];
+    let t2 = across[1];
+    let sigma_t = object.extinction; // sigma_a + sigma_s' (gpu_scene.rs)
     let sigma_a = max(sigma_t - object.reduced_scattering, vec3<f32>(1e-6));
     let sigma_tr = sqrt(3.0 * sigma_a * sigma_t);
     // Groenendaal's fit of the diffuse Fresnel reflectance, as the dipole uses (dipole.rs).
