@@ -8,9 +8,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export SUBSURFACE_FUZZ_SECONDS="${1:-600}"
 cargo build -q -p subsurface-render --tests
-cargo test -q -p subsurface-render --test mesh_fuzz mutants -- --nocapture 2>&1 | grep -E "executions|failures|panicked|test result" &
+cargo test -q -p subsurface-render --test integration mesh_fuzz::mutants -- --nocapture 2>&1 | grep -E "executions|failures|panicked|test result" &
 mesh=$!
-cargo test -q -p subsurface-render --test fuzz_inputs -- --nocapture 2>&1 | grep -E "executions|failures|panicked|test result" &
+cargo test -q -p subsurface-render --test integration fuzz_inputs:: -- --nocapture 2>&1 | grep -E "executions|failures|panicked|test result" &
 inputs=$!
 status=0
 wait "$mesh" || status=1

@@ -29,6 +29,8 @@ ABLATIONS = [
     ("no_lateral", ["--lateral-taps", "0"], "the chord's slab alone"),
     ("no_unscattered", ["--set", "transmittance.ballistic=false"], "without the unscattered light"),
     ("no_single", ["--set", "transmittance.single_scattering=false"], "without the once-scattered light"),
+    ("no_side_walls", ["--set", "transmittance.side_walls=false"], "without the side walls' share"),
+    ("no_thin_parts", ["--set", "sss.thin_parts=false"], "thin parts reflect as thick ones"),
     ("per_pixel", ["--map-texel-mm", "0"], "every pixel evaluates its own transmitted light"),
     ("no_blur", ["--sss", "none"], "no screen-space diffusion"),
     ("supersample", ["--supersample", "4"], "4 x 4 samples a pixel, as the path tracer's box filter"),
@@ -37,6 +39,12 @@ ABLATIONS = [
 
 def lum(rgb):
     return sum(c * w for c, w in zip(rgb, LUM))
+
+
+# Terms whose removal can explain a miss, as (ablation, what it removes).
+TERMS = (("no_lateral", "lateral taps"), ("no_unscattered", "unscattered light"),
+         ("no_single", "once-scattered light"), ("no_side_walls", "side walls' share"),
+         ("no_thin_parts", "thin parts' reflectance"))
 
 
 def verdict(r, band):
@@ -48,8 +56,7 @@ def verdict(r, band):
         return "sampling", "4 x 4 samples a pixel bring it to {:+.0%}".format(r["errors"]["supersample"])
     if abs(r["errors"]["per_pixel"]) <= band:
         return "map", "evaluated per pixel it reads {:+.0%}".format(r["errors"]["per_pixel"])
-    for key, name in (("no_lateral", "lateral taps"), ("no_unscattered", "unscattered light"),
-                      ("no_single", "once-scattered light")):
+    for key, name in TERMS:
         if abs(r["errors"][key]) <= band and abs(r["errors"][key]) < abs(err):
             return "term", "without the {} it reads {:+.0%}".format(name, r["errors"][key])
     if abs(r["errors"]["no_blur"]) <= band:
@@ -96,7 +103,7 @@ def explain(misses, run_compare, band):
                     "transmitted": lum(ours) - lum(refl),
                     "transmitted_needed": lum(ref) - lum(refl),
                     "adds": {key: lum(ours) - lum(runs[key][region]["mean_realtime"])
-                             for key in ("no_lateral", "no_unscattered", "no_single")},
+                             for key, _ in TERMS},
                 }
                 rec["reflected_share"] = rec["reflected"] / max(rec["ours"], 1e-12)
                 rec["transmitted_ratio_rgb"] = [
@@ -113,17 +120,19 @@ def markdown(records, band):
     lines = [
         f"Regions outside ±{band:.0%} with the defaults, each rendered again with one part changed "
         "(`suite.py explain`). Columns: the error as shipped; per pixel (no map); at 4 x 4 samples; "
-        "without the lateral taps, the unscattered and the once-scattered light; the share of ours "
+        "without the lateral taps, the unscattered and the once-scattered light, the side walls' share and "
+        "the thin parts' reflectance; the share of ours "
         "that is reflected light; the verdict and its figure.",
         "",
-        "| scene | region | error | per pixel | 4x4 | no lateral | no unscattered | no single | reflected | cause | measured |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|",
+        "| scene | region | error | per pixel | 4x4 | no lateral | no unscattered | no single | no walls | no thin | reflected | cause | measured |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
     for r in sorted(records, key=lambda r: (r["cause"], r["scene"], r["region"])):
         e = r["errors"]
-        lines.append("| {}{} | {} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:.0%} | {} | {} |".format(
+        lines.append("| {}{} | {} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:+.0%} | {:.0%} | {} | {} |".format(
             r["scene"], " (held out)" if r["held_out"] else "", r["region"], r["error"], e["per_pixel"],
-            e["supersample"], e["no_lateral"], e["no_unscattered"], e["no_single"], r["reflected_share"],
+            e["supersample"], e["no_lateral"], e["no_unscattered"], e["no_single"], e["no_side_walls"],
+            e["no_thin_parts"], r["reflected_share"],
             r["cause"], r["why"]))
     counts = {}
     for r in records:

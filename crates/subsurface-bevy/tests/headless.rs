@@ -2,7 +2,7 @@
 //! and the image read back shows it: the renderer, PBR lighting and Bevy's shadow maps work
 //! with this crate's feature set on this machine's adapter.
 
-mod common;
+use crate::common;
 
 use bevy::prelude::*;
 use common::*;

@@ -7,7 +7,7 @@
 //! its linear depth is the camera's distance, exactly what the step reads from Bevy's depth
 //! buffer. The specular twins are hidden: the comparison is of the diffuse light alone.
 
-mod common;
+use crate::common;
 
 use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;

@@ -3,7 +3,7 @@
 //! must come back bit for bit; skin pixels must change, keep their energy, and lose the
 //! skin marker.
 
-mod common;
+use crate::common;
 
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;

@@ -3,7 +3,7 @@
 //! free path is the longest), comes out furthest. The skin is white here, so the colour of
 //! the light gained in the shadow is the profile's own.
 
-mod common;
+use crate::common;
 
 use bevy::prelude::*;
 use common::*;

@@ -5,7 +5,7 @@
 //! (`clip_from_world`); the maps are reverse-Z (the texel nearest the light holds the largest
 //! depth) and `Depth32Float` with texture usage, so our passes can bind them.
 
-mod common;
+use crate::common;
 
 use bevy::pbr::{LightEntity, ViewLightEntities, ViewShadowBindings};
 use bevy::prelude::*;

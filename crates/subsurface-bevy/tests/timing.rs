@@ -1,7 +1,8 @@
-//! Frame times with and without the plugin (not a check: `cargo test --test timing --
-//! --ignored --nocapture`). Figures go to docs/lab/bevy.md with the machine they came from.
+//! Frame times with and without the plugin (not a check: `cargo test -p subsurface-bevy
+//! --test integration timing:: -- --ignored --nocapture`). Figures go to docs/lab/bevy.md
+//! with the machine they came from.
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 

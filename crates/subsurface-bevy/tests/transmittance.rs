@@ -5,7 +5,7 @@
 //! much as exact slab transport says 3 mm of skin passes; the ball's dark side, 10 cm
 //! through, gains nothing; nothing but skin changes.
 
-mod common;
+use crate::common;
 
 use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;

@@ -2,7 +2,7 @@
 //! must each give the image they give alone: per-camera state must not leak between them
 //! (uniforms written for one camera must not be read by the other's passes).
 
-mod common;
+use crate::common;
 
 use bevy::prelude::*;
 use common::*;

@@ -1,7 +1,7 @@
 //! The `subsurface` binary as users run it: outputs, JSON shapes, and one-line errors with a
 //! non-zero exit and no partial file for bad input.
 
-mod common;
+use crate::common;
 
 use std::process::Output;
 

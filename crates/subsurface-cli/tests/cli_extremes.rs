@@ -4,7 +4,7 @@
 //! 32-bit floats). Each either works with well-defined output or fails with one `error:` line
 //! naming the field and leaves no output behind.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

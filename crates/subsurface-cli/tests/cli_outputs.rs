@@ -6,7 +6,7 @@
 //! destination matters more than the content: `--out DIR` writes `DIR/meshes/*.ply` through
 //! temporary files and then `DIR/scene.xml`, which the tests make a link, FIFO or device.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

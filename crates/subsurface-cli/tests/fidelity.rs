@@ -8,7 +8,7 @@
 //!   (references/fidelity.json) plus a margin, the knife edge's width too, and below those of
 //!   `--sss none --transmittance off`; the other presets within their own targets.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Issue 41, "hardening, round two": each bad input gives exactly one `error:` line naming the
 //! file and the field, exit status 1 and no output file, in every subcommand that reads it.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

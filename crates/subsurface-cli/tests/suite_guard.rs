@@ -9,7 +9,7 @@
 //! When the renderer's image changes on purpose, re-run `suite.py report` (docs/lab/suite.md)
 //! and commit the new report with the change.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

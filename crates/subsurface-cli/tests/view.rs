@@ -6,7 +6,7 @@
 //! (`cargo test -p subsurface-cli --bin subsurface view::`); here the binary is checked end
 //! to end.
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

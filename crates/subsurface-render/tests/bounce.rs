@@ -2,7 +2,7 @@
 //! here in closed form per point: a lit floor and a wall standing on it, the wall's face
 //! taking in what the floor reflects.
 
-mod common;
+use crate::common;
 
 use common::{context, options, scene};
 use subsurface_profile::oracle::bounce::{self as oracle, FluxCell, FluxLevel, Gather};

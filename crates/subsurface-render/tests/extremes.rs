@@ -2,7 +2,7 @@
 //! within its range: each numeric setting at its extremes, one at a time, on a small
 //! backlit scene that exercises shadows, transmittance and every SSS method.
 
-mod common;
+use crate::common;
 
 use common::{context, light_toml, scene};
 use subsurface_render::{RenderOptions, Renderer, Scene, SssMethod, TransmittanceMethod};

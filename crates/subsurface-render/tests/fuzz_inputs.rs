@@ -6,7 +6,7 @@
 //! In `cargo test` a fixed replay runs; `SUBSURFACE_FUZZ_SECONDS=N` (tools/fuzz.sh) runs
 //! fresh mutants for N seconds per target and reports the executions.
 
-mod common;
+use crate::common;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};

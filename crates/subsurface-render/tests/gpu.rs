@@ -1,7 +1,7 @@
 //! GPU tests of the foundation (shadow maps, lighting, tone map) on whatever adapter wgpu
 //! finds: lavapipe in CI. Images are small so the software rasteriser stays fast.
 
-mod common;
+use crate::common;
 
 use common::{
     assert_update_gives, camera_toml, context, dark_scene, light_toml, masked_mean, options, scene,

@@ -5,11 +5,11 @@
 //! draw. Same seed, same mutants: a failure reproduces, and the failing input is written
 //! under the target's tmp dir.
 //!
-//! `cargo test -p subsurface-render --test mesh_fuzz -- --ignored regenerate_corpus`
+//! `cargo test -p subsurface-render --test integration mesh_fuzz::regenerate_corpus -- --ignored`
 //! rewrites the seed corpus from the builders in `mesh_util`.
 
-mod common;
-mod mesh_util;
+use crate::common;
+use crate::mesh_util;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,9 +18,6 @@ use common::{Rng, fuzz_budget, named_in_order};
 use gltf::json::Value;
 use mesh_util::*;
 use subsurface_render::mesh::{BUILTIN_HAND_GLB, load_gltf_slice};
-
-#[global_allocator]
-static METER: Meter = Meter;
 
 /// Mutants per seed; the hand (94 kB, thousands of vertices) is slower to load than the
 /// small seeds, so it gets fewer.

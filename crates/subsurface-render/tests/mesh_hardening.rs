@@ -2,16 +2,13 @@
 //! names the file and the node or accessor at fault - never a panic, a stack overflow, a
 //! hang, a huge allocation or a silently different mesh.
 
-mod mesh_util;
+use crate::mesh_util;
 
 use glam::Vec3;
 use mesh_util::*;
 use subsurface_render::mesh::{
     self, MAX_GLTF_INDICES, MAX_GLTF_VERTICES, MAX_NODE_DEPTH, MAX_NODE_INSTANCES, load_gltf_slice,
 };
-
-#[global_allocator]
-static METER: Meter = Meter;
 
 fn load_ok(bytes: &[u8], name: &str) -> mesh::GltfModel {
     let t0 = std::time::Instant::now();

@@ -3,7 +3,7 @@
 //! lighting pass's own chords inline (`"lighting"`) give, on the default scene and on a backlit
 //! finger whose outline the chords light, in a first frame and after the camera moves.
 
-mod common;
+use crate::common;
 
 use common::{context, options, repo_root};
 use subsurface_render::{OutlineChords, Renderer, Scene};

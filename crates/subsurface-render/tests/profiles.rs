@@ -2,8 +2,8 @@
 //! with its own kernel by every screen-space method, on the pass alone and in the renderer,
 //! against the CPU oracles with the same profile table.
 
-mod common;
-mod sss_util;
+use crate::common;
+use crate::sss_util;
 
 use common::{camera_toml, context, light_toml, scene};
 use sss_util::*;

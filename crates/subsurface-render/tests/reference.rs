@@ -2,7 +2,7 @@
 //! the head. References are lavapipe renders at 256x256 blessed with SUBSURFACE_BLESS=1; on
 //! failure the actual and FLIP heat-map images land in target/test-output/.
 
-mod common;
+use crate::common;
 
 use common::{context, flip_against_reference, head_scene, options};
 use subsurface_render::SssMethod;

@@ -2,7 +2,7 @@
 //! follows the layer's matrix, `set_layers` moves a layer as a new pass would, and
 //! `set_region` writes only its texels.
 
-mod common;
+use crate::common;
 
 use glam::{Mat4, Vec3};
 use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};

@@ -5,7 +5,7 @@
 //! its diameter. The renderer's ratio is read the same way: the part and the slab rendered
 //! alike, the diffuse target alone (no blur, no unscattered or once-scattered light).
 
-mod common;
+use crate::common;
 
 use common::{camera_toml, context, dark_scene, diffuse_with, light_toml, repo_root};
 use subsurface_render::{Scene, SssMethod};

@@ -3,7 +3,7 @@
 //! give the image `Renderer` gives of the same scene, and the skin passes must be what changes
 //! the skin.
 
-mod common;
+use crate::common;
 
 #[path = "../examples/skin_in_your_renderer.rs"]
 #[allow(dead_code)]

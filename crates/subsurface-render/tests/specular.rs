@@ -2,7 +2,7 @@
 //! (`subsurface_profile::specular`, the rough dielectric the path tracer renders), head-on and
 //! where a back light grazes a rim toward the camera.
 
-mod common;
+use crate::common;
 
 use common::{camera_toml, context, light_toml, options, scene};
 use subsurface_profile::specular::boundary_reflection;

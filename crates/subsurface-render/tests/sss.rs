@@ -3,8 +3,8 @@
 //! The passes are driven through their public API on textures made here, as another wgpu
 //! application would.
 
-mod common;
-mod sss_util;
+use crate::common;
+use crate::sss_util;
 
 use common::{context, scene};
 use sss_util::*;

@@ -2,7 +2,7 @@
 //! tsm`): the GPU blur against its CPU mirror and against the exact sum-of-Gaussians
 //! convolution, the head against its reference image, seams on the head, and TSM.
 
-mod common;
+use crate::common;
 
 use common::{
     camera_toml, context, flip_against_reference, head_scene, options, read4, upload_texture,

@@ -4,7 +4,7 @@
 //! half-space reflectance), a method independent of the renderer's LUT and of its thickness
 //! estimate from the back faces.
 
-mod common;
+use crate::common;
 
 use common::{camera_toml, context, dark_scene, diffuse_with, light_toml};
 use subsurface_profile::{Dipole, SlabSolver};

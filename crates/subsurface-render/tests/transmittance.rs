@@ -1,7 +1,7 @@
 //! Transmittance through thin parts (Jimenez et al. 2010) measured in rendered images against
 //! the analytic T(s) of the skin profile.
 
-mod common;
+use crate::common;
 
 use common::{camera_toml, context, options, white_object_scene};
 use subsurface_profile::SumOfGaussians;

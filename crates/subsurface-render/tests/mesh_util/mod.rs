@@ -229,6 +229,11 @@ pub fn expect_err(bytes: &[u8], name: &str, parts: &[&str]) -> String {
 /// Counts the allocations of the threads that ask for it (tests run in parallel).
 pub struct Meter;
 
+// The test binary's allocator: it counts on the calling thread only, so tests running on
+// other threads do not disturb a metered load.
+#[global_allocator]
+static METER: Meter = Meter;
+
 thread_local! {
     static METERING: Cell<bool> = const { Cell::new(false) };
     static LARGEST: Cell<usize> = const { Cell::new(0) };
@@ -265,7 +270,7 @@ unsafe impl GlobalAlloc for Meter {
 }
 
 /// Runs `f` and returns its result with the largest single allocation and the total
-/// bytes allocated on this thread meanwhile (needs `#[global_allocator] Meter`).
+/// bytes allocated on this thread meanwhile.
 pub fn metered<R>(f: impl FnOnce() -> R) -> (R, usize, usize) {
     LARGEST.with(|l| l.set(0));
     TOTAL.with(|t| t.set(0));
