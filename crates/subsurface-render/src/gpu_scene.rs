@@ -86,6 +86,10 @@ pub fn medium_uniform(
         reduced_scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
         boundary_fit: boundary_fit(m.roughness, optics.dipole.eta),
+        transport_decay: std::array::from_fn(|c| optics.dipole.channel(c).sigma_tr as f32),
+        _pad3: 0.0,
+        extrapolation_mm: std::array::from_fn(|c| optics.dipole.channel(c).z_b as f32),
+        _pad4: 0.0,
     }
 }
 
@@ -342,5 +346,43 @@ pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
         focal_px,
         viewport: [width as f32, height as f32],
         _pad: 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::MaterialCache;
+    use crate::scene::MaterialDesc;
+    use subsurface_profile::{Coefficients, Medium};
+
+    /// The side walls' image sources (transmittance.wgsl, `side_wall_share`) read the medium's
+    /// sigma_tr and z_b from the object uniform, as the dipole derives them. At eta = 4 the
+    /// polynomial F_dr fit alone passes 1 (dipole.rs), which made the shader's own copy of it
+    /// put the walls' images at a negative height; the uniform holds the dipole's exact values.
+    #[test]
+    fn the_uniform_carries_the_dipoles_transport_constants() {
+        for eta in [1.3, 4.0] {
+            let medium = Medium::Coefficients(Coefficients {
+                sigma_a: [0.032, 0.17, 0.48],
+                sigma_s: [0.74, 0.88, 1.01],
+                eta,
+            });
+            let optics = MaterialCache::default().get(&medium, "m").unwrap();
+            let u = medium_uniform(&MaterialDesc::default(), &optics, 1.0, 8.0, 0);
+            for c in 0..3 {
+                let want = optics.dipole.channel(c);
+                assert_eq!(
+                    u.transport_decay[c], want.sigma_tr as f32,
+                    "eta {eta} sigma_tr"
+                );
+                assert_eq!(u.extrapolation_mm[c], want.z_b as f32, "eta {eta} z_b");
+                assert!(
+                    u.extrapolation_mm[c] > 0.0,
+                    "eta {eta}: z_b {}",
+                    u.extrapolation_mm[c]
+                );
+            }
+        }
     }
 }

@@ -143,6 +143,16 @@ pub struct ObjectUniform {
     /// The rough boundary's transmittance against the cosine, as a degree-7 polynomial:
     /// coefficients 0..4, 4..8 (`subsurface_profile::specular::rough_transmittance_fit`).
     pub boundary_fit: [[f32; 4]; 2],
+    /// The diffusion approximation's effective transport coefficient sigma_tr per mm
+    /// (`subsurface_profile::DiffusionChannel::sigma_tr`): how fast diffuse light decays.
+    pub transport_decay: [f32; 3],
+    /// Padding to the WGSL layout.
+    pub _pad3: f32,
+    /// Height of the extrapolated boundary z_b = 2 A D in mm
+    /// (`subsurface_profile::DiffusionChannel::z_b`), where a side wall's image source sits.
+    pub extrapolation_mm: [f32; 3],
+    /// Padding to the WGSL layout.
+    pub _pad4: f32,
 }
 
 /// One shadow-map layer's camera (`ShadowView` in shadow.wgsl).
@@ -338,6 +348,8 @@ mod layout_tests {
                 index,
                 reduced_scattering,
                 boundary_fit,
+                transport_decay,
+                extrapolation_mm,
             }
         );
     }

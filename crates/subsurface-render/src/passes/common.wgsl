@@ -72,6 +72,10 @@ struct Object {
     // The rough boundary's transmittance against the cosine: coefficients 0-3 and 4-7 of a
     // degree-7 polynomial (transmittance.wgsl, boundary_transmittance).
     boundary_fit: array<vec4<f32>, 2>,
+    // The diffusion approximation's per-channel constants of the medium (dipole.rs, computed
+    // once on the CPU): sigma_tr, 1/mm, and the extrapolated boundary's height z_b, mm.
+    transport_decay: vec3<f32>,
+    extrapolation_mm: vec3<f32>,
 };
 
 // The distance stored in shadow maps: Euclidean distance to point and spot lights, distance

@@ -477,13 +477,8 @@ fn side_wall_share(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     let across = across_light(l);
     let t1 = across[0];
     let t2 = across[1];
-    let sigma_t = object.extinction; // sigma_a + sigma_s' (gpu_scene.rs)
-    let sigma_a = max(sigma_t - object.reduced_scattering, vec3<f32>(1e-6));
-    let sigma_tr = sqrt(3.0 * sigma_a * sigma_t);
-    // Groenendaal's fit of the diffuse Fresnel reflectance, as the dipole uses (dipole.rs).
-    let eta = max(object.eta, 1.0);
-    let fdr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
-    let z_b = 2.0 * (1.0 + fdr) / (1.0 - fdr) / (3.0 * sigma_t);
+    let sigma_tr = object.transport_decay;
+    let z_b = object.extrapolation_mm;
     let s = max(s_mm, 1e-3);
     var taken = vec3<f32>(0.0);
     for (var k = 0u; k < 4u; k++) {
