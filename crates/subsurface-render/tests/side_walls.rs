@@ -54,10 +54,28 @@ fn backlit(shape: &str, medium: &str, r_mm: f32) -> Scene {
     )
 }
 
+/// A cylinder of `medium` and radius `r_mm` as [`backlit`] renders it, with a twin on each
+/// side across a gap of `gap_mm` (their axes parallel, all three in the plane across the light).
+fn rod_between_twins(medium: &str, r_mm: f32, gap_mm: f32) -> Scene {
+    let m = r_mm / 1000.0;
+    let mut scene = backlit("cylinder", medium, r_mm);
+    let twin = scene.desc.objects[0].clone();
+    for side in [-1.0f32, 1.0] {
+        let mut o = twin.clone();
+        o.translation = [side * (2.0 * m + gap_mm / 1000.0), 0.0, 0.0];
+        scene.desc.objects.push(o);
+    }
+    Scene::from_desc(scene.desc, std::path::Path::new("."), "twins.toml").unwrap()
+}
+
 /// The diffuse target at the middle of the part (a cylinder's axis runs up the frame: 64 rows
 /// of its 8 middle columns), channel by channel.
 fn middle(shape: &str, medium: &str, r_mm: f32, side_walls: bool) -> [f32; 3] {
-    let d = diffuse_with(&backlit(shape, medium, r_mm), 128, 128, |s| {
+    middle_of(&backlit(shape, medium, r_mm), shape, side_walls)
+}
+
+fn middle_of(scene: &Scene, shape: &str, side_walls: bool) -> [f32; 3] {
+    let d = diffuse_with(scene, 128, 128, |s| {
         s.sss.method = SssMethod::None;
         s.transmittance.ballistic = false;
         s.transmittance.single_scattering = false;
@@ -78,8 +96,9 @@ fn middle(shape: &str, medium: &str, r_mm: f32, side_walls: bool) -> [f32; 3] {
     sum.map(|s| (s / n) as f32)
 }
 
-/// The walk's ratio part / slab for one medium, shape, radius and channel.
-fn walk(medium: &str, shape: &str, r_mm: f64, channel: &str) -> f64 {
+/// The walk's ratio part / slab for one medium, shape, radius and channel, and its standard
+/// error.
+fn walk(medium: &str, shape: &str, r_mm: f64, channel: &str) -> (f64, f64) {
     let text = std::fs::read_to_string(repo_root().join("references/confinement_mc.json")).unwrap();
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let point = doc["points"]
@@ -93,15 +112,20 @@ fn walk(medium: &str, shape: &str, r_mm: f64, channel: &str) -> f64 {
                 && p["channel"] == channel
         })
         .unwrap_or_else(|| panic!("the walk's table has no {medium} {shape} {r_mm} mm {channel}"));
-    point["ratio"].as_f64().unwrap()
+    (
+        point["ratio"].as_f64().unwrap(),
+        point["ratio_stderr"].as_f64().unwrap(),
+    )
 }
 
 /// The middle of backlit rods, in media whose channels absorb little for the rod's size, lets
-/// through what the walk says (within 8 %). With the kernel-mass coverage in the walls' place
-/// the same cases read 0.686 / 0.738 / 0.483 / 0.623 / 0.756 against the walk's 0.783 / 0.618
-/// / 0.824 / 0.925 / 0.668: 12 to 41 % off, every one outside the band. (Balls are not held
-/// here: their four walls overcount, a 10 mm ball of skin2 reads 0.37 against the walk's 0.46;
-/// docs/lab/suite.md, session 32.)
+/// through what the walk says (within 8 %, or two of the walk's standard errors). With the kernel-mass coverage in the walls' place
+/// the first five cases read 0.686 / 0.738 / 0.483 / 0.623 / 0.756 against the walk's 0.783 /
+/// 0.618 / 0.824 / 0.925 / 0.668: 12 to 41 % off, every one outside the band. In the sixth, a
+/// 16 mm rod, the lateral taps give more than the chord: without the walls' loss on their
+/// light too it read 0.97 against the walk's 0.77 (docs/lab/suite.md, session 34). (Balls are
+/// not held here: their four walls overcount, a 10 mm ball of skin2 reads 0.37 against the
+/// walk's 0.46; session 32.)
 #[test]
 fn a_backlit_rod_keeps_what_a_random_walk_says() {
     if context().is_none() {
@@ -113,22 +137,26 @@ fn a_backlit_rod_keeps_what_a_random_walk_says() {
         ("custom", "cylinder", 3.0, 1),
         ("custom", "cylinder", 5.0, 1),
         ("skin2", "cylinder", 5.0, 0),
+        ("skin2", "cylinder", 8.0, 0),
     ];
     let mut misses = Vec::new();
     for (medium, shape, r_mm, c) in cases {
         let part = middle(shape, medium, r_mm as f32, true)[c];
         let slab = middle("slab", medium, r_mm as f32, true)[c];
         let got = f64::from(part / slab);
-        let want = walk(medium, shape, r_mm, ["R", "G", "B"][c]);
-        if (got / want - 1.0).abs() > 0.08 {
+        let (want, stderr) = walk(medium, shape, r_mm, ["R", "G", "B"][c]);
+        // The walk's own noise bounds what can be asked: 8 %, or two of its standard errors
+        // where they are wider (the 16 mm rod's 9 %).
+        let band = 0.08f64.max(2.0 * stderr / want);
+        if (got / want - 1.0).abs() > band {
             misses.push(format!(
-                "{medium} {shape} {r_mm} mm channel {c}: {got:.3} against the walk's {want:.3}"
+                "{medium} {shape} {r_mm} mm channel {c}: {got:.3} against the walk's {want:.3} +- {stderr:.3}"
             ));
         }
     }
     assert!(
         misses.is_empty(),
-        "part / slab off the walk by more than 8 %: {misses:?}"
+        "part / slab off the walk by more than its band: {misses:?}"
     );
 }
 
@@ -153,4 +181,32 @@ fn a_wide_slab_loses_nothing_to_walls() {
             );
         }
     }
+}
+
+/// A wall facing a like part across a narrow gap (one finger beside the next) loses only what
+/// leaves the gap: the neighbour takes the wall's light in and sends as much back. The share
+/// that leaves is 1 - F, F the view factor between two parallel strips as tall as the chord
+/// across the gap: for a 6 mm rod with twins 0.5 mm away, F = 0.92. So the walls take at most a
+/// quarter of what they take from the lone rod (without the gap's return they take the same).
+#[test]
+fn a_wall_across_a_narrow_gap_from_a_like_part_keeps_its_light() {
+    if context().is_none() {
+        return;
+    }
+    let lone = backlit("cylinder", "skin2", 3.0);
+    let twins = rod_between_twins("skin2", 3.0, 0.5);
+    let taken = |scene: &Scene| {
+        let on = middle_of(scene, "cylinder", true)[0];
+        let off = middle_of(scene, "cylinder", false)[0];
+        1.0 - on / off
+    };
+    let (alone, beside) = (taken(&lone), taken(&twins));
+    assert!(
+        alone > 0.1,
+        "a lone rod's walls take {alone:.3} of its light: too little to test the gap on"
+    );
+    assert!(
+        beside <= 0.25 * alone,
+        "between twins 0.5 mm away the walls take {beside:.3}, alone {alone:.3}"
+    );
 }

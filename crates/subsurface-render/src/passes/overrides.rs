@@ -66,7 +66,7 @@ impl Terms {
     /// (lighting.wgsl `thin_part_reflectance`, from the back faces' depth).
     pub const THIN_PARTS: u32 = 8;
     /// The side walls of a part narrower than the light's spread take their share of the
-    /// chord's light (transmittance.wgsl `side_wall_share`).
+    /// chord's and the lateral taps' light (side_walls.wgsl `side_wall_share`).
     pub const SIDE_WALLS: u32 = 16;
     /// Every term.
     pub const ALL: Self = Self(31);

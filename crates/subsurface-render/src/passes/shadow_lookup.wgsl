@@ -136,8 +136,8 @@ fn shadow_factor_bilinear(light: Light, p: vec3<f32>) -> f32 {
 // The optional terms this pipeline evaluates, a bit each (overrides.rs, `Terms`): 1
 // `diffusion`'s unscattered lobe, 2 its single scattering, 4 the diffusion source's shadow
 // along the refracted ray (source_shadow), 8 thin parts' reflectance (lighting.wgsl,
-// thin_part_reflectance), 16 the side walls' share of the chord's light (transmittance.wgsl,
-// side_wall_share). Pipelines without a term compile without its code.
+// thin_part_reflectance), 16 the side walls' share of the chord's and the lateral taps' light
+// (side_walls.wgsl, side_wall_share). Pipelines without a term compile without its code.
 override DIFFUSION_TERMS: u32 = 31u;
 
 fn has_term(bit: u32) -> bool {

@@ -455,78 +455,6 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     return sum;
 }
 
-// Whether the light's shadow map holds any surface on the ray through q.
-fn shadow_covered(light: Light, q: vec3<f32>) -> bool {
-    let sc = shadow_coord(light, q);
-    return sc.inside && textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).r <= 1e30;
-}
-
-// The share of the chord's slab light that a part narrower than the light's spread keeps:
-// 1 - sum over its side walls of the light each takes (per channel). A slab is infinite
-// across the light; a rod or a ball lit from behind has walls beside the chord, and light
-// that wanders to them leaves. Diffusion theory's method of images: a wall puts a negative
-// image of the source beyond its extrapolated boundary (z_b = 2 A D), which takes
-// (s / r') exp(-sigma_tr (r' - s)) of the light arriving at distance s, r' being the image's
-// distance, sqrt(s^2 + 4 (w + z_b)^2) for a wall w from the chord. Nothing in it is fitted: at
-// the middle of backlit rods it matches a random walk in the same media
-// (tools/reference/confinement_mc.py; docs/lab/suite.md, session 32). The walls are where the
-// shadow map finds no surface, marching across the light in four directions.
-fn side_wall_share(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, s_mm: f32) -> vec3<f32> {
-    let units_per_mm = object.world_per_mm * object.translucency;
-    let shrunk = p - n_vertex * lights.normal_shrink;
-    let across = across_light(l);
-    let t1 = across[0];
-    let t2 = across[1];
-    let sigma_tr = object.transport_decay;
-    let z_b = object.extrapolation_mm;
-    let s = max(s_mm, 1e-3);
-    var taken = vec3<f32>(0.0);
-    for (var k = 0u; k < 4u; k++) {
-        let sign = select(1.0, -1.0, (k & 1u) == 1u);
-        let d = select(t1, t2, k >= 2u) * sign;
-        // The wall lies between the last covered step and the first uncovered one. Steps of
-        // half a millimetre to 8 mm, so that the march does not jump the gap between two
-        // fingers (steps growing from the start left blotches along the default scene's
-        // fingers, where a texel's march landed on the next finger and found no wall), then
-        // growing by half to 18 mm, past which a wall takes about a per cent of the light of
-        // the slowest medium (marble) and nothing measurable of skin's. Halvings of the
-        // bracket then place the wall within an eighth of a step, so that it moves smoothly
-        // with the point (a wall at the bracket's middle jumped between neighbouring texels of
-        // the transmitted map).
-        var covered_to = 0.0;
-        var open_at = -1.0;
-        var rho = 0.5;
-        for (var j = 0u; j < 18u; j++) {
-            if (!shadow_covered(light, shrunk + d * (rho * units_per_mm))) {
-                open_at = rho;
-                break;
-            }
-            covered_to = rho;
-            rho = select(rho + 0.5, rho * 1.5, rho >= 8.0);
-        }
-        if (open_at < 0.0) {
-            continue;
-        }
-        for (var j = 0u; j < 2u; j++) {
-            let mid = 0.5 * (covered_to + open_at);
-            if (shadow_covered(light, shrunk + d * (mid * units_per_mm))) {
-                covered_to = mid;
-            } else {
-                open_at = mid;
-            }
-        }
-        let wall = 0.5 * (covered_to + open_at);
-        let image = sqrt(s * s + 4.0 * (wall + z_b) * (wall + z_b));
-        // A wall the exit point faces is its own surface curving away (a rim), whose image the
-        // chord's slab already holds; only the share of the wall's direction across the exit's
-        // normal is a boundary of its own (without this a backlit sphere's rim read -26 %
-        // against the path tracer, with it -15 %; -4 % without walls).
-        let facing = max(dot(n_vertex, d), 0.0);
-        taken += s / image * exp(-sigma_tr * (image - s)) * (1.0 - facing * facing);
-    }
-    return max(vec3<f32>(1.0) - taken, vec3<f32>(0.0));
-}
-
 struct Transmitted {
     diffuse: vec3<f32>,   // joins the irradiance before the blur (times the albedo)
     ballistic: vec3<f32>, // unscattered: joins the specular target, neither blurred nor tinted
@@ -629,12 +557,19 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                     // the kernel's mass counts where the slab's light comes from, not how much
                     // of it the walls take, which depends on the medium's absorption (skin2's
                     // 10 mm rods read +40 % with the coverage, skin1's -4 %).
+                    // The lateral taps' light crosses the same part and meets the same walls
+                    // (without their loss, where the taps give more than the chord a 16 mm
+                    // skin2 rod read 0.97 of its slab against a random walk's 0.77, and the
+                    // suite's backlit marble ball +69 % in its middle; with it +5 %). The
+                    // kernel-mass coverage is the chord's alone: it is what the taps miss.
                     let coverage = select(1.0, lateral_mass.x / lateral_mass.y, lateral_mass.y > 0.0);
                     var kept = vec3<f32>(coverage);
+                    var lateral_kept = vec3<f32>(1.0);
                     if (has_term(TERM_SIDE_WALLS)) {
                         kept = side_wall_share(light, p, n_vertex, l, s_mm);
+                        lateral_kept = kept;
                     }
-                    diffuse = max(diffuse * kept, shape * lateral);
+                    diffuse = max(diffuse * kept, shape * lateral * lateral_kept);
                 }
                 out.diffuse = diffuse * unlit;
                 var ballistic = vec3<f32>(0.0);

@@ -94,8 +94,9 @@ pub struct TransmittanceSettings {
     /// 2001's single-scattering term, which diffusion leaves out).
     pub single_scattering: bool,
     /// `diffusion`: the sides of a part narrower than the light's spread (a rod, a ball, lit
-    /// from behind) take their share of the chord's light, by the method of images; without
-    /// it, the share of the lateral taps' kernel that the part covers.
+    /// from behind) take their share of the chord's and the lateral taps' light, by the method
+    /// of images, less what a like part across a narrow gap sends back; without it, the chord's
+    /// light is scaled by the share of the lateral taps' kernel that the part covers.
     pub side_walls: bool,
 }
 
