@@ -2,7 +2,8 @@
 
 /// The lighting shader's WGSL files in order (ids, common declarations, groups 0 and 1, lighting,
 /// shadow lookups, transmittance and its side walls, bounce), then `$extra` (more WGSL, e.g.
-/// `include_str!` of a pass's entry points): the one list every pass built on the lighting shader starts from.
+/// `include_str!` of a pass's entry points): the one list every pass built on the lighting
+/// shader starts from.
 macro_rules! lighting_shader {
     ($($extra:expr),* $(,)?) => {
         concat!(
