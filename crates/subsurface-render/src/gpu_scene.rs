@@ -60,6 +60,7 @@ pub fn medium_uniform(
     profile_row: u32,
 ) -> ObjectUniform {
     let m = material;
+    let diffusion: [_; 3] = std::array::from_fn(|c| optics.dipole.channel(c));
     ObjectUniform {
         model: mat(Mat4::IDENTITY),
         normal_matrix: mat(Mat4::IDENTITY),
@@ -86,9 +87,9 @@ pub fn medium_uniform(
         reduced_scattering: optics.dipole.sigma_s_prime.map(|x| x as f32),
         _pad2: 0.0,
         boundary_fit: boundary_fit(m.roughness, optics.dipole.eta),
-        transport_decay: std::array::from_fn(|c| optics.dipole.channel(c).sigma_tr as f32),
+        transport_decay: diffusion.map(|d| d.sigma_tr as f32),
         _pad3: 0.0,
-        extrapolation_mm: std::array::from_fn(|c| optics.dipole.channel(c).z_b as f32),
+        extrapolation_mm: diffusion.map(|d| d.z_b as f32),
         _pad4: 0.0,
     }
 }
@@ -356,7 +357,7 @@ mod tests {
     use crate::scene::MaterialDesc;
     use subsurface_profile::{Coefficients, Medium};
 
-    /// The side walls' image sources (transmittance.wgsl, `side_wall_share`) read the medium's
+    /// The side walls' image sources (side_walls.wgsl, `side_wall_share`) read the medium's
     /// sigma_tr and z_b from the object uniform, as the dipole derives them. At eta = 4 the
     /// polynomial F_dr fit alone passes 1 (dipole.rs), which made the shader's own copy of it
     /// put the walls' images at a negative height; the uniform holds the dipole's exact values.

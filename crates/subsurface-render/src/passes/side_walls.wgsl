@@ -1,6 +1,6 @@
 // The side walls of a part narrower than the light's spread (`transmittance.side_walls`): the
-// share of the chord's slab light that such a part keeps. Part of the lighting shader's list
-// (passes/mod.rs), after transmittance.wgsl, which calls it.
+// share of the chord's and the lateral taps' light that such a part keeps. Part of the
+// lighting shader's list (passes/mod.rs), after transmittance.wgsl, which calls it.
 
 // Whether the light's shadow map holds any surface on the ray through q.
 fn shadow_covered(light: Light, q: vec3<f32>) -> bool {
@@ -95,4 +95,3 @@ fn side_wall_share(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
     }
     return max(vec3<f32>(1.0) - taken, vec3<f32>(0.0));
 }
-
