@@ -413,15 +413,7 @@ fn lateral_tap_sum(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>
         let d = texel.x;
         // The mirrored tap, across the chord: at an outline one of the two lies on the part,
         // beside a part narrower than the kernel neither does.
-        var covered = d <= 1e30;
-        if (!covered) {
-            let qm = 2.0 * shrunk - q;
-            let scm = shadow_coord(light, qm);
-            if (scm.inside) {
-                covered = textureLoad(shadow_atlas, shadow_texel(light, scm), scm.layer, 0).r <= 1e30;
-            }
-        }
-        if (covered) {
+        if (d <= 1e30 || shadow_covered(light, 2.0 * shrunk - q)) {
             mass_hit += slab_w;
         }
         if (!sc.inside || d > 1e30) {
