@@ -232,48 +232,6 @@ fn min_thickness_mm(p: vec3<f32>, n_vertex: vec3<f32>) -> f32 {
     return best;
 }
 
-// Light that crosses a thin part without scattering (our extension of `diffusion`): the
-// medium attenuates it by exp(-sigma_t s), the boundary refracts it twice, and its roughness
-// spreads it into a narrow lobe around the refracted direction. For Beckmann slopes of RMS
-// alpha / sqrt(2) per axis, one interface deviates a ray by about (eta - 1) times the facet
-// tilt (Snell's law at small angles, measured outside), so the two interfaces give a Gaussian
-// lobe of sigma = alpha (eta - 1) per axis. A collimated irradiance E then leaves radiance
-// pi E T p(theta) in this renderer's units (pi, because our Lambertian radiance is albedo x E).
-// It is what makes the thin end of a backlit wedge 2-6x brighter in the path tracer than any
-// diffusion model (docs/lab/fidelity.md): a prism of skin bends the light toward the camera.
-fn ballistic_transmittance(s_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
-    let eta = max(object.eta, 1.0001);
-    let inside = refract(-l, n_back, 1.0 / eta);
-    let cos_i = dot(n_back, l);
-    let cos_exit = dot(inside, n_front);
-    if (cos_i <= 0.0 || cos_exit <= 0.0) {
-        return vec3<f32>(0.0);
-    }
-    let out = refract(inside, -n_front, eta);
-    if (dot(out, out) < 0.5) {
-        return vec3<f32>(0.0); // total internal reflection at the exit
-    }
-    // How far a facet tilt d turns the ray: at the entry the refracted ray turns by
-    // (1 - cos i / (eta cos t)) d, and the exit turns the inside spread by its angular
-    // magnification m = eta cos t' / cos o and adds (m - 1) d of its own. At normal incidence
-    // both are (eta - 1) d (outside); toward grazing, both grow without bound, which is what
-    // spreads the light through a finger's thin rim over the view. Beckmann slopes of RMS
-    // alpha / sqrt(2) per axis.
-    let cos_t = -dot(inside, n_back);
-    let cos_o = max(dot(normalize(out), n_front), 0.05);
-    let turn_in = abs(1.0 - cos_i / (eta * max(cos_t, 1e-3)));
-    let magnify = eta * cos_exit / cos_o;
-    let slope = object.roughness * 0.70710678;
-    // A smooth boundary's lobe is a delta that pixels cannot resolve: keep it a few mrad wide;
-    // past a radian the small-angle lobe no longer means anything.
-    let sigma = clamp(slope * length(vec2<f32>(magnify * turn_in, magnify - 1.0)), 0.005, 1.0);
-    let theta2 = 2.0 * max(1.0 - dot(normalize(out), v), 0.0);
-    let lobe = exp(-theta2 / (2.0 * sigma * sigma)) / (2.0 * PI * sigma * sigma);
-    let t_in = 1.0 - boundary_fresnel(cos_i);
-    let t_out = 1.0 - boundary_fresnel(dot(out, n_front));
-    return PI * t_in * t_out * exp(-object.extinction * s_mm) * lobe;
-}
-
 // Light scattered once on its way from the lit side to the camera (our extension of
 // `diffusion`; Jensen et al. 2001's single-scattering term, which diffusion leaves out).
 // Along the camera ray refracted into p, each point q at depth t sees the light after the
@@ -566,7 +524,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                 out.diffuse = diffuse * unlit;
                 var ballistic = vec3<f32>(0.0);
                 if (has_term(TERM_BALLISTIC)) {
-                    ballistic = ballistic_transmittance(s_mm * object.translucency, n_back, n_vertex, l, v);
+                    ballistic = unscattered_light(light, p, n_vertex, l, v, s_mm);
                 }
                 // Single scattering only where the surface faces away from the light: where it
                 // faces the light, its shadow test's penumbra and the map's texels would print
