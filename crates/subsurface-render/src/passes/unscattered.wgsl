@@ -13,8 +13,9 @@
 // It is what makes the thin end of a backlit wedge 2-6x brighter in the path tracer than any
 // diffusion model (docs/lab/fidelity.md): a prism of skin bends the light toward the camera.
 // `n_back` is the entry's normal and `through_mm` the path to it along the camera's ray
-// refracted at p (`refracted_entry`); `chord_mm` is the chord along the light.
-fn ballistic_transmittance(through_mm: f32, chord_mm: f32, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+// refracted at p (`refracted_entry`); `bend` is the
+// entry surface's curvature times the path, along the two axes across the light (`entry_bend`).
+fn ballistic_transmittance(through_mm: f32, bend: vec2<f32>, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
     let inside = refract(-l, n_back, 1.0 / eta);
     let cos_i = dot(n_back, l);
@@ -37,18 +38,28 @@ fn ballistic_transmittance(through_mm: f32, chord_mm: f32, n_back: vec3<f32>, n_
     let turn_in = abs(1.0 - cos_i / (eta * max(cos_t, 1e-3)));
     let magnify = eta * cos_exit / cos_o;
     let slope = object.roughness * 0.70710678;
+    // A curved entry is a lens: a ray the exit's facets turn by d meets the entry a path t
+    // further aside, where the normal has turned by kappa t d, and the light it finds there is
+    // turned back toward it by turn_in kappa t d. The exit's share of the spread shrinks by
+    // |1 - turn_in kappa t| along each axis (a 25 mm ball of ketchup seen on its axis: 0.54),
+    // which concentrates the light the camera sees; a slab (kappa = 0) keeps both shares.
+    let exit_spread = (magnify - 1.0) * abs(vec2<f32>(1.0) - turn_in * bend);
+    let spread2 = vec2<f32>(magnify * turn_in * magnify * turn_in) + exit_spread * exit_spread;
     // A smooth boundary's lobe is a delta that pixels cannot resolve: keep it a few mrad wide;
-    // past a radian the small-angle lobe no longer means anything.
-    let sigma = clamp(slope * length(vec2<f32>(magnify * turn_in, magnify - 1.0)), 0.005, 1.0);
+    // past a radian the small-angle lobe no longer means anything. One width for both axes,
+    // their geometric mean, keeps the lobe's peak (1 / (2 pi sigma_x sigma_y)).
+    let sigma = clamp(slope * sqrt(sqrt(spread2.x * spread2.y)), 0.005, 1.0);
     // The facets must turn the light by the angle between its refracted direction and the
     // camera's; the likeliest split gives each interface its share of the lobe's variance. The
     // share turned at the entry runs along the camera's refracted ray (`through_mm`), the share
-    // turned at the exit along the light's own way, for which the chord stands (a tilted slab
-    // seen head-on and lit at 60 degrees: 3.05 against 6 mm of skin through 3 mm; either
-    // alone put its centre at +16 or +5 % against the path tracer, the split at +8 %).
+    // turned at the exit along the light's own refracted way to the exit's plane (`own_mm`); at
+    // the lobe's peak both are the refracted path Snell's law gives (a 1 mm slab turned 40
+    // degrees: 1.125 mm, where the straight chord along the light is 1.31).
     let var_in = (magnify * turn_in) * (magnify * turn_in);
-    let var_out = (magnify - 1.0) * (magnify - 1.0);
-    let path_mm = mix(chord_mm, through_mm, var_in / max(var_in + var_out, 1e-6));
+    let var_out = exit_spread.x * exit_spread.y;
+    let r = refract(-v, n_front, 1.0 / eta);
+    let own_mm = through_mm * max(-dot(r, n_front), 0.0) / cos_exit;
+    let path_mm = mix(own_mm, through_mm, var_in / max(var_in + var_out, 1e-6));
     let theta2 = 2.0 * max(1.0 - dot(normalize(out), v), 0.0);
     let lobe = exp(-theta2 / (2.0 * sigma * sigma)) / (2.0 * PI * sigma * sigma);
     let t_in = 1.0 - boundary_fresnel(cos_i);
@@ -64,7 +75,7 @@ fn ballistic_transmittance(through_mm: f32, chord_mm: f32, n_back: vec3<f32>, n_
 // ray's crossing of the lit surface is where its point's light distance meets the stored one.
 // Against the path tracer (docs/lab/suite.md, session 36) a 10 mm ball of chicken1 lit 35
 // degrees off the axis read -88 % at its far outline with the chord's entry, +19 % with both
-// boundaries index-matched, and -44 % with this entry.
+// boundaries index-matched, -44 % with this entry and -25 % with the entry's curvature too.
 const ENTRY_STEPS: i32 = 12;
 const ENTRY_HALVINGS: i32 = 4;
 // q's depth below the lit surface along the light, in profile mm, and the stored normal's code;
@@ -80,10 +91,16 @@ fn depth_below_entry(light: Light, q: vec3<f32>, units_per_mm: f32) -> vec2<f32>
     }
     return vec2<f32>((light_distance(light.kind, light.position, light.direction, q) - d.x) / units_per_mm, d.y);
 }
-fn refracted_entry(light: Light, p: vec3<f32>, n_front: vec3<f32>, v: vec3<f32>, reach_mm: f32) -> Entry {
-    var e: Entry;
+struct Through {
+    s_mm: f32,          // the path from p, profile mm (-1: no entry)
+    normal: vec3<f32>,  // the entry's normal
+    point: vec3<f32>,   // the entry
+};
+fn refracted_entry(light: Light, p: vec3<f32>, n_front: vec3<f32>, v: vec3<f32>, reach_mm: f32) -> Through {
+    var e: Through;
     e.s_mm = -1.0;
     e.normal = vec3<f32>(0.0);
+    e.point = p;
     let eta = max(object.eta, 1.0001);
     let r = refract(-v, n_front, 1.0 / eta);
     if (dot(v, n_front) <= 0.0 || dot(r, r) < 0.5) {
@@ -128,7 +145,27 @@ fn refracted_entry(light: Light, p: vec3<f32>, n_front: vec3<f32>, v: vec3<f32>,
     }
     e.s_mm = 0.5 * (inside + outside);
     e.normal = decode_normal(normal_code);
+    e.point = p + r * (e.s_mm * units_per_mm);
     return e;
+}
+
+// The entry surface's curvature (1 / profile mm, positive where it bulges toward the light)
+// along the two axes across the light: its stored normals a quarter of the path to either side
+// (at least 0.25 mm), differenced. 0 along an axis where either side finds no surface.
+fn entry_bend(light: Light, e: Through, l: vec3<f32>) -> vec2<f32> {
+    let units_per_mm = object.world_per_mm * object.translucency;
+    let eps_mm = max(0.25 * e.s_mm, 0.25);
+    let axes = across_light(l);
+    var kappa = vec2<f32>(0.0);
+    for (var i = 0; i < 2; i++) {
+        let a = axes[i];
+        let plus = depth_below_entry(light, e.point + a * (eps_mm * units_per_mm), units_per_mm).y;
+        let minus = depth_below_entry(light, e.point - a * (eps_mm * units_per_mm), units_per_mm).y;
+        if (plus >= 0.0 && minus >= 0.0) {
+            kappa[i] = dot(decode_normal(plus) - decode_normal(minus), a) / (2.0 * eps_mm);
+        }
+    }
+    return kappa;
 }
 
 // The unscattered light that leaves p toward the camera, as a factor of the light's radiance.
@@ -143,5 +180,6 @@ fn unscattered_light(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
     if (through.s_mm <= 0.0) {
         return vec3<f32>(0.0);
     }
-    return ballistic_transmittance(through.s_mm * object.translucency, chord_mm * object.translucency, through.normal, n_front, l, v);
+    let bend = entry_bend(light, through, l) * through.s_mm;
+    return ballistic_transmittance(through.s_mm * object.translucency, bend, through.normal, n_front, l, v);
 }
