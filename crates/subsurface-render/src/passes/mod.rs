@@ -1,9 +1,9 @@
 //! One module per pass, each with its WGSL beside it.
 
 /// The lighting shader's WGSL files in order (ids, common declarations, groups 0 and 1, lighting,
-/// shadow lookups, transmittance, its side walls and its unscattered light, bounce), then `$extra` (more WGSL, e.g.
-/// `include_str!` of a pass's entry points): the one list every pass built on the lighting
-/// shader starts from.
+/// shadow lookups, transmittance, its side walls and its unscattered light, bounce), then
+/// `$extra` (more WGSL, e.g. `include_str!` of a pass's entry points): the one list every pass
+/// built on the lighting shader starts from.
 macro_rules! lighting_shader {
     ($($extra:expr),* $(,)?) => {
         concat!(

@@ -13,8 +13,8 @@
 // It is what makes the thin end of a backlit wedge 2-6x brighter in the path tracer than any
 // diffusion model (docs/lab/fidelity.md): a prism of skin bends the light toward the camera.
 // `n_back` is the entry's normal and `through_mm` the path to it along the camera's ray
-// refracted at p (`refracted_entry`); `bend` is the
-// entry surface's curvature times the path, along the two axes across the light (`entry_bend`).
+// refracted at p (`refracted_entry`); `bend` is the entry surface's curvature times that path,
+// along the two axes across the light (`entry_bend`).
 fn ballistic_transmittance(through_mm: f32, bend: vec2<f32>, n_back: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
     let inside = refract(-l, n_back, 1.0 / eta);
