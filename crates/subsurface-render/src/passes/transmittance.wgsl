@@ -267,6 +267,21 @@ fn min_extinction() -> f32 {
     return min(min(object.extinction.x, object.extinction.y), object.extinction.z);
 }
 
+// q's depth below the lit surface along the light, in profile mm, and the stored normal's code;
+// (-1, -1) outside the map or where the light sees nothing. The single scattering's march and
+// the unscattered light's entry (unscattered.wgsl) both step along the refracted camera ray.
+fn depth_below_entry(light: Light, q: vec3<f32>, units_per_mm: f32) -> vec2<f32> {
+    let sc = shadow_coord(light, q);
+    if (!sc.inside) {
+        return vec2<f32>(-1.0, -1.0);
+    }
+    let d = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
+    if (d.x > 1e30) {
+        return vec2<f32>(-1.0, -1.0);
+    }
+    return vec2<f32>((light_distance(light.kind, light.position, light.direction, q) - d.x) / units_per_mm, d.y);
+}
+
 fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32>, v: vec3<f32>, s_mm: f32) -> vec3<f32> {
     let eta = max(object.eta, 1.0001);
     let r = refract(-v, n_front, 1.0 / eta);
@@ -279,19 +294,14 @@ fn single_scattering(light: Light, p: vec3<f32>, n_front: vec3<f32>, l: vec3<f32
     var sum = vec3<f32>(0.0);
     for (var k = 0; k < MARCH_STEPS; k++) {
         let t = (f32(k) + 0.5) * step_mm;
-        let q = p + r * (t * units_per_mm);
-        let sc = shadow_coord(light, q);
-        if (!sc.inside) {
+        let b = depth_below_entry(light, p + r * (t * units_per_mm), units_per_mm);
+        // Beyond the far side (or outside the map, or nothing seen by the light there): the
+        // ray has left.
+        if (b.x <= 0.0) {
             break;
         }
-        let d = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
-        let s_i = (light_distance(light.kind, light.position, light.direction, q) - d.x) / units_per_mm;
-        // Beyond the far side (or nothing seen by the light there): the ray has left.
-        if (d.x > 1e30 || s_i <= 0.0) {
-            break;
-        }
-        let cos_e = select(1.0, max(dot(decode_normal(d.y), l), 0.0), d.y >= 0.0);
-        sum += boundary_transmittance(cos_e) * exp(-object.extinction * (t + s_i));
+        let cos_e = select(1.0, max(dot(decode_normal(b.y), l), 0.0), b.y >= 0.0);
+        sum += boundary_transmittance(cos_e) * exp(-object.extinction * (t + b.x));
     }
     let t_out = boundary_transmittance(cos_v);
     return object.reduced_scattering * 0.25 * sum * step_mm * t_out;

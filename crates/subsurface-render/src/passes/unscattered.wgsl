@@ -78,19 +78,6 @@ fn ballistic_transmittance(through_mm: f32, bend: vec2<f32>, n_back: vec3<f32>, 
 // boundaries index-matched, -44 % with this entry and -25 % with the entry's curvature too.
 const ENTRY_STEPS: i32 = 12;
 const ENTRY_HALVINGS: i32 = 4;
-// q's depth below the lit surface along the light, in profile mm, and the stored normal's code;
-// (-1, -1) outside the map or where the light sees nothing.
-fn depth_below_entry(light: Light, q: vec3<f32>, units_per_mm: f32) -> vec2<f32> {
-    let sc = shadow_coord(light, q);
-    if (!sc.inside) {
-        return vec2<f32>(-1.0, -1.0);
-    }
-    let d = textureLoad(shadow_atlas, shadow_texel(light, sc), sc.layer, 0).rg;
-    if (d.x > 1e30) {
-        return vec2<f32>(-1.0, -1.0);
-    }
-    return vec2<f32>((light_distance(light.kind, light.position, light.direction, q) - d.x) / units_per_mm, d.y);
-}
 struct Through {
     s_mm: f32,          // the path from p, profile mm (-1: no entry)
     normal: vec3<f32>,  // the entry's normal
@@ -133,11 +120,11 @@ fn refracted_entry(light: Light, p: vec3<f32>, n_front: vec3<f32>, v: vec3<f32>,
         let b = depth_below_entry(light, p + r * (t * units_per_mm), units_per_mm);
         if (b.x > 0.0) {
             inside = t;
-        } else if (b.y >= 0.0) {
-            outside = t;
-            normal_code = b.y;
         } else {
             outside = t;
+            if (b.y >= 0.0) {
+                normal_code = b.y;
+            }
         }
     }
     if (normal_code < 0.0) {
