@@ -481,7 +481,8 @@ fn update_follows_the_transmitted_map_reduction() {
 /// The transmitted map's pass sums every light's transmitted light into two layers (diffuse; unscattered
 /// and singly scattered) in one pass. The default scene's two lights copied (four shadowed
 /// lights, each twice) must give twice what the two give, texel for texel, on the same
-/// surfaces; the bounce pass fills the layer after them, on those surfaces too.
+/// surfaces, and each copy must reach the texels its original reaches (layer 1's `a`); the
+/// bounce pass fills the layer after them, on those surfaces too.
 #[test]
 fn the_lateral_pass_sums_every_lights_transmitted_light() {
     let Some(ctx) = context() else { return };
@@ -504,15 +505,29 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
     let scene = subsurface_render::Scene::default_scene();
     let mut doubled = scene.clone();
     let lights = doubled.desc.lights.clone();
+    let n = lights.len();
     doubled.desc.lights.extend(lights);
     let (once, twice) = (layers(&scene), layers(&doubled));
+    let mut reached = 0;
     for layer in 0..2 {
         let mut lit = 0;
         for (a, b) in once[layer]
             .chunks_exact(4)
             .zip(twice[layer].chunks_exact(4))
         {
-            assert!(a[3] == b[3], "layer {layer}: a texel's depth differs");
+            if layer == 0 {
+                assert!(a[3] == b[3], "layer {layer}: a texel's depth differs");
+            } else {
+                // Layer 1's `a`: the lights that reach the texel directly, a bit each; the
+                // copies are lights n..2n.
+                let (code, doubled_code) = (a[3] as u32, b[3] as u32);
+                assert_eq!(
+                    doubled_code,
+                    code | (code << n),
+                    "the lights that reach a texel, with the lights twice"
+                );
+                reached += usize::from(code != 0);
+            }
             for c in 0..3 {
                 let want = 2.0 * a[c];
                 assert!(
@@ -528,6 +543,7 @@ fn the_lateral_pass_sums_every_lights_transmitted_light() {
         }
         assert!(lit > 50, "layer {layer}: only {lit} texels transmit light");
     }
+    assert!(reached > 50, "only {reached} texels are reached by a light");
     // Every texel the map's pass drew holds the bounce and that depth.
     let mut bounced = 0;
     for (t, b) in once[0].chunks_exact(4).zip(once[2].chunks_exact(4)) {

@@ -15,6 +15,34 @@ const LATERAL_DEPTH_TOLERANCE: f32 = 0.25;
 const LATERAL_MIN_WEIGHT: f32 = 0.3;
 // How far in depth, in depth tolerances, the nearest texel of a silhouette pixel may lie.
 const LATERAL_NEAREST_TOLERANCES: f32 = 16.0;
+// Where the four texels' light differs by more than EXPONENTIAL_FROM times, it changes across
+// them as diffusion decays, exponentially, and the bilinear blend lies above the curve between
+// them (halfway between texels 50 times apart it gives 0.51 of the brighter one, the curve
+// 0.14): a backlit wedge's light-side outline, 3-10 pixels inside its bright rim, read +141 %
+// against the path tracer, evaluated per pixel +15 %, blended in the logarithm +22 %. The
+// blend moves to the logarithm's from EXPONENTIAL_FROM to EXPONENTIAL_FULL times; below, the
+// linear blend stays, since on a smooth field the logarithm's lies lower by half the square of
+// the relative change (1-2 points off the canonical fingers, already at -24 % for `medium`;
+// docs/lab/suite.md, session 37).
+const EXPONENTIAL_FROM: f32 = 2.0;
+const EXPONENTIAL_FULL: f32 = 8.0;
+// A texel without light stands for this share of the brightest in the logarithm's blend.
+const EXPONENTIAL_FLOOR: f32 = 1e-3;
+
+// Which lights reach a point directly on a surface facing them (bit i for light i): there a
+// light's transmitted light is zero (`transmittance`: the point is its own entry), a step the
+// light's terminator draws across the map's smooth field. The map pass stores each texel's code
+// in layer 1's `a` (transmitted_map.wgsl), and a pixel takes no texel that a light reaches
+// where the pixel is in that light's shadow: the unlit pixels within a texel of a terminator
+// blended in the lit texels' zero (a backlit chicken1 ball's light-side outline read -55 %
+// against the path tracer, evaluated per pixel -40 %, now -37 %). The other way round a lit
+// pixel keeps its unlit texels' light: per pixel it would get none, but near a terminator the
+// path tracer shows light that entered the hidden faces beside it (the reflected misses of
+// docs/lab/suite.md), and without it the canonical hand's fingers lost a point (-24.4 to -25.4 %
+// at `medium`, session 37).
+fn lit_code(code: u32, i: u32, facing: f32, shadow: f32) -> u32 {
+    return select(code, code | (1u << i), facing > 0.0 && shadow >= 0.5);
+}
 
 // The pixel the lighting pass shades, for reading `diffusion` and the bounce from the map: its
 // centre in pixels, its view depth and that depth's change per pixel across the surface.
@@ -22,6 +50,8 @@ struct ScreenSample {
     xy: vec2<f32>,
     depth: f32,
     gradient: vec2<f32>,
+    // `lit_code` over the lights at the pixel's surface.
+    lit: u32,
 };
 
 // The pixel's surface extended as a plane (its depth derivatives), at the centre of the map
@@ -46,38 +76,66 @@ fn map_depth_tolerance() -> f32 {
 }
 
 // The four map texels around a pixel, from `base` (k = 0..3: base + (k % 2, k / 2)): the
-// bilinear weight of each that holds the pixel's surface (0 for the others), their sum, and
-// their diffuse light so weighted.
+// bilinear weight of each that matches the pixel (`texel_matches`; 0 for the others),
+// their sum, and their diffuse and unscattered light so weighted.
 struct MapTexels {
     base: vec2<i32>,
-    weights: vec4<f32>,
     weight: f32,
     diffuse: vec3<f32>,
+    ballistic: vec3<f32>,
 };
 
-// The four texels around `screen`'s pixel that count with their bilinear weights where their
-// surface lies within the tolerance of the pixel's, extended as a plane to the texel's centre
-// (so a slanted surface keeps its texels and a depth edge loses them).
+// Whether a map texel's light can stand for the pixel's: its surface lies within the tolerance
+// of the pixel's, extended as a plane to the texel's centre (a slanted surface keeps its texels,
+// a depth edge loses them), and no light reaches it directly that the pixel is shadowed from.
+fn texel_matches(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>, depth: f32, tolerance: f32) -> bool {
+    if (depth <= 0.0 || abs(depth - plane_depth(screen, texel, scale)) > tolerance) {
+        return false;
+    }
+    return (u32(textureLoad(transmitted_map, texel, 1, 0).a) & ~screen.lit) == 0u;
+}
+
+// The four texels around `screen`'s pixel that count with their bilinear weights where they
+// match the pixel (`texel_matches`), their diffuse light blended linearly or, across a steep
+// change, in the logarithm.
 fn map_texels(screen: ScreenSample) -> MapTexels {
     let size = vec2<i32>(textureDimensions(transmitted_map));
     let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
     let pos = screen.xy * scale - 0.5;
-    var out = MapTexels(vec2<i32>(floor(pos)), vec4<f32>(0.0), 0.0, vec3<f32>(0.0));
+    var out = MapTexels(vec2<i32>(floor(pos)), 0.0, vec3<f32>(0.0), vec3<f32>(0.0));
     let f = pos - floor(pos);
     let tolerance = map_depth_tolerance();
+    var values: array<vec3<f32>, 4>;
+    var weights = vec4<f32>(0.0);
+    var top = vec3<f32>(0.0);
+    var low = vec3<f32>(3.4e38);
     for (var k = 0; k < 4; k++) {
         let texel = out.base + vec2<i32>(k % 2, k / 2);
         if (any(texel < vec2<i32>(0)) || any(texel >= size)) {
             continue;
         }
         let d = textureLoad(transmitted_map, texel, 0, 0);
-        if (d.w <= 0.0 || abs(d.w - plane_depth(screen, texel, scale)) > tolerance) {
+        if (!texel_matches(screen, texel, scale, d.w, tolerance)) {
             continue;
         }
         let w = select(1.0 - f.x, f.x, k % 2 == 1) * select(1.0 - f.y, f.y, k / 2 == 1);
-        out.weights[k] = w;
         out.weight += w;
         out.diffuse += d.rgb * w;
+        out.ballistic += textureLoad(transmitted_map, texel, 1, 0).rgb * w;
+        weights[k] = w;
+        values[k] = d.rgb;
+        top = max(top, d.rgb);
+        low = min(low, d.rgb);
+    }
+    if (out.weight > 0.0 && any(top > low * EXPONENTIAL_FROM)) {
+        let floor_value = top * EXPONENTIAL_FLOOR + vec3<f32>(1e-30);
+        var log_sum = vec3<f32>(0.0);
+        for (var k = 0; k < 4; k++) {
+            log_sum += weights[k] * log(max(values[k], floor_value));
+        }
+        let spread = log(max(top, floor_value) / max(low, floor_value));
+        let share = smoothstep(vec3<f32>(log(EXPONENTIAL_FROM)), vec3<f32>(log(EXPONENTIAL_FULL)), spread);
+        out.diffuse = mix(out.diffuse, exp(log_sum / out.weight) * out.weight, share);
     }
     return out;
 }
@@ -104,14 +162,8 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
     }
     let around = map_texels(screen);
     if (around.weight >= LATERAL_MIN_WEIGHT) {
-        for (var k = 0; k < 4; k++) {
-            if (around.weights[k] > 0.0) {
-                let texel = around.base + vec2<i32>(k % 2, k / 2);
-                out.ballistic += textureLoad(transmitted_map, texel, 1, 0).rgb * around.weights[k];
-            }
-        }
         out.diffuse = around.diffuse / around.weight;
-        out.ballistic /= around.weight;
+        out.ballistic = around.ballistic / around.weight;
         return MapRead(out, true);
     }
     let base = around.base;
@@ -127,7 +179,7 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
             }
             let d = textureLoad(transmitted_map, texel, 0, 0);
             let gap = abs(d.w - screen.depth);
-            if (d.w > 0.0 && gap < nearest.w) {
+            if (d.w > 0.0 && gap < nearest.w && (u32(textureLoad(transmitted_map, texel, 1, 0).a) & ~screen.lit) == 0u) {
                 nearest = vec4<f32>(d.rgb, gap);
             }
         }

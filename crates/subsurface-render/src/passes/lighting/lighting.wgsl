@@ -195,6 +195,21 @@ fn light_radiance(light: Light, world: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     return min(light.color * attenuation, vec3<f32>(HALF_MAX)) * spot;
 }
 
+// Light `i`'s `transmittance` at `world`, times its radiance there. `shadow`: its shadow factor
+// at `world`, or < 0 to look it up here, after the radiance test (a point outside the light's
+// cone reads no shadow map).
+fn radiant_transmittance(i: u32, world: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, shadow: f32) -> Transmitted {
+    let light = lights.lights[i];
+    let l = light_direction(light.kind, light.position, light.direction, world);
+    let radiance = light_radiance(light, world, l);
+    if (all(radiance <= vec3<f32>(0.0))) {
+        return Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    let lit = select(shadow, shadow_factor(light, world), shadow < 0.0);
+    let t = transmittance(light, world, n_vertex, l, v, lit);
+    return Transmitted(radiance * t.diffuse, radiance * t.ballistic);
+}
+
 // Where a pipeline that reads `diffusion` from the transmitted map runs each light's chord at
 // the pixels the map misses (`frame_plan::LightingVariant::outline_pass`): false in `shade`
 // below, true in the outline pass after the lighting pass (outline.wgsl). A CPU rasteriser
@@ -227,10 +242,8 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     // nearest texel's diffuse light stands here alone.
     let from_map = TRANSMITTANCE_METHOD == TRANSMITTANCE_DIFFUSION && LATERAL_SOURCE == LATERAL_MAP;
     let chords_here = !(from_map && OUTLINE_PASS);
-    var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
-    if (from_map) {
-        mapped = transmitted_from_map(screen);
-    }
+    var shadows: array<f32, MAX_LIGHTS>;
+    var lit = 0u;
     for (var i = 0u; i < count; i++) {
         let light = lights.lights[i];
         let l = light_direction(light.kind, light.position, light.direction, world);
@@ -240,6 +253,7 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
             continue;
         }
         let shadow = shadow_factor(light, world);
+        shadows[i] = shadow;
         if (tsm) {
             // The back-side irradiance already holds every light's radiance; a point this
             // light sees directly is the entry point itself and receives nothing through it.
@@ -250,10 +264,19 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
         }
         s.irradiance += radiance * source_shadow(light, world, n_vertex, l, shadow) * max(dot(n, l), 0.0);
         s.specular += radiance * shadow * boundary_specular(n, l, v, m, rho_s);
-        if (!mapped.on_surface && chords_here) {
-            let t = transmittance(light, world, n_vertex, l, v, shadow);
-            s.transmitted += radiance * t.diffuse;
-            s.specular += radiance * t.ballistic;
+        lit = lit_code(lit, i, dot(n_vertex, l), shadow);
+    }
+    var mapped = MapRead(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), false);
+    if (from_map) {
+        var at = screen;
+        at.lit = lit;
+        mapped = transmitted_from_map(at);
+    }
+    if (!mapped.on_surface && chords_here) {
+        for (var i = 0u; i < count; i++) {
+            let t = radiant_transmittance(i, world, n_vertex, v, shadows[i]);
+            s.transmitted += t.diffuse;
+            s.specular += t.ballistic;
         }
     }
     if (from_map) {
@@ -294,7 +317,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     // In uniform control flow: the derivatives extend the pixel's surface to the transmitted map's
     // texels around it.
     let depth = dot(in.world - camera.position, camera.forward);
-    let screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));
+    let screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)), 0u);
     let s = shade(in.world, n, n_vertex, v, m, rho_s, ts.y > 0.5, screen);
 
     var out: GBuffer;

@@ -21,12 +21,11 @@ struct OutlineOut {
 fn fs_outline(in: LitVarying, @builtin(front_facing) front: bool) -> OutlineOut {
     let n_vertex = select(-1.0, 1.0, front) * normalize(in.normal);
     let depth = dot(in.world - camera.position, camera.forward);
-    let screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)));
+    var screen = ScreenSample(in.clip.xy, depth, vec2<f32>(dpdx(depth), dpdy(depth)), 0u);
     var albedo = object.albedo;
     if (object.has_albedo_map != 0u) {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
     }
-    let nearest = transmitted_from_map(screen).t.diffuse;
     let v = normalize(camera.position - in.world);
     var diffuse = vec3<f32>(0.0);
     var specular = vec3<f32>(0.0);
@@ -38,10 +37,13 @@ fn fs_outline(in: LitVarying, @builtin(front_facing) front: bool) -> OutlineOut 
         if (all(radiance <= vec3<f32>(0.0))) {
             continue;
         }
-        let t = transmittance(light, in.world, n_vertex, l, v, shadow_factor(light, in.world));
+        let shadow = shadow_factor(light, in.world);
+        screen.lit = lit_code(screen.lit, i, dot(n_vertex, l), shadow);
+        let t = transmittance(light, in.world, n_vertex, l, v, shadow);
         diffuse += radiance * t.diffuse;
         specular += radiance * t.ballistic;
     }
+    let nearest = transmitted_from_map(screen).t.diffuse;
     var out: OutlineOut;
     let excess = albedo * max(diffuse - nearest, vec3<f32>(0.0));
     out.diffuse = vec4<f32>(min(excess, vec3<f32>(HALF_MAX)), 0.0);

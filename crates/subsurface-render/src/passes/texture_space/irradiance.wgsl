@@ -37,7 +37,7 @@ fn fs_irradiance(in: LitVarying) -> IrradianceOut {
         albedo *= textureSample(albedo_map, material_sampler, in.uv).rgb;
     }
     // Texels of a UV map are no pixels of the transmitted map: the taps run here.
-    let screen = ScreenSample(vec2<f32>(0.0), 0.0, vec2<f32>(0.0));
+    let screen = ScreenSample(vec2<f32>(0.0), 0.0, vec2<f32>(0.0), 0u);
     let s = shade(in.world, n, n_vertex, n_vertex, 1.0, 0.0, false, screen);
     var out: IrradianceOut;
     let pre = albedo_power(albedo, texture_space.params.z);

@@ -51,15 +51,9 @@ fn fs_deferred_transmitted(@builtin(position) frag: vec4<f32>) -> TransmittedOut
     let transmits = TRANSMITTANCE_METHOD != TRANSMITTANCE_OFF && TRANSMITTANCE_METHOD != TRANSMITTANCE_TSM;
     let count = select(0u, min(lights.count, MAX_LIGHTS), transmits);
     for (var i = 0u; i < count; i++) {
-        let light = lights.lights[i];
-        let l = light_direction(light.kind, light.position, light.direction, world);
-        let radiance = light_radiance(light, world, l);
-        if (all(radiance <= vec3<f32>(0.0))) {
-            continue;
-        }
-        let t = transmittance(light, world, n_vertex, l, v, shadow_factor(light, world));
-        diffuse += radiance * t.diffuse;
-        specular += radiance * t.ballistic;
+        let t = radiant_transmittance(i, world, n_vertex, v, -1.0);
+        diffuse += t.diffuse;
+        specular += t.ballistic;
     }
     if (BOUNCE_SOURCE == BOUNCE_GATHER) {
         diffuse += bounce_irradiance(world, n_vertex);

@@ -1,7 +1,8 @@
 // The map pass: `diffusion`'s whole transmitted light, every light together, at each texel
 // of the reduced-resolution transmitted map (layer 0 the diffuse part, which joins the irradiance;
-// layer 1 the unscattered and singly scattered part, which joins the specular target; a = the
-// texel's view depth, 0 where nothing was drawn). What crosses skin changes over the medium's
+// layer 1 the unscattered and singly scattered part, which joins the specular target; layer 0's
+// a = the texel's view depth, 0 where nothing was drawn, layer 1's the lights that reach it
+// directly, `lit_code` in map_read.wgsl). What crosses skin changes over the medium's
 // decay length, not from pixel to pixel (the diffuse part is blurred by the profile after this
 // anyway), so a texel of a few millimetres serves a block of pixels, and the lighting pass
 // reads one interpolated value per pixel instead of running each light's thickness, LUT reads,
@@ -24,36 +25,46 @@ struct LateralPair {
 };
 
 // `diffusion`'s transmitted light leaving `world` (vertex normal `n_vertex`, turned toward the
-// camera's side), every shadowed light's radiance summed.
-fn transmitted_light(world: vec3<f32>, n_vertex: vec3<f32>) -> Transmitted {
-    var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+// camera's side), every shadowed light's radiance summed, and the lights that reach it directly
+// (`lit_code`, map_read.wgsl).
+fn transmitted_light(world: vec3<f32>, n_vertex: vec3<f32>) -> TexelLight {
+    var out = TexelLight(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), 0u);
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let t = light_transmitted(i, world, n_vertex);
-        out.diffuse += t.diffuse;
-        out.ballistic += t.ballistic;
+        out.t.diffuse += t.t.diffuse;
+        out.t.ballistic += t.t.ballistic;
+        out.lit |= t.lit;
     }
     return out;
 }
 
-// Light `i`'s part of `transmitted_light`, its radiance included.
-fn light_transmitted(i: u32, world: vec3<f32>, n_vertex: vec3<f32>) -> Transmitted {
-    var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
-    // Opaque objects keep only their depth in the map (the lighting pass's read tests it);
-    // `light_entry` would find no thickness for any light.
+// One light's part of a texel, or every light's: its transmitted light, radiance included, and
+// its `lit_code` bits.
+struct TexelLight {
+    t: Transmitted,
+    lit: u32,
+};
+
+// Light `i`'s part of `transmitted_light`.
+fn light_transmitted(i: u32, world: vec3<f32>, n_vertex: vec3<f32>) -> TexelLight {
+    var out = TexelLight(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), 0u);
     let light = lights.lights[i];
-    if (object.translucency <= 0.0 || light.first_layer < 0.0) {
-        return out;
-    }
     let v = normalize(camera.position - world);
     let l = light_direction(light.kind, light.position, light.direction, world);
     let radiance = light_radiance(light, world, l);
     if (all(radiance <= vec3<f32>(0.0))) {
         return out;
     }
-    let t = transmittance(light, world, n_vertex, l, v, shadow_factor(light, world));
-    out.diffuse = radiance * t.diffuse;
-    out.ballistic = radiance * t.ballistic;
+    let shadow = shadow_factor(light, world);
+    out.lit = lit_code(0u, i, dot(n_vertex, l), shadow);
+    // Opaque objects keep only their depth in the map (the lighting pass's read tests it);
+    // `light_entry` would find no thickness for any light.
+    if (object.translucency <= 0.0 || light.first_layer < 0.0) {
+        return out;
+    }
+    let t = transmittance(light, world, n_vertex, l, v, shadow);
+    out.t = Transmitted(radiance * t.diffuse, radiance * t.ballistic);
     return out;
 }
 
@@ -61,7 +72,7 @@ fn light_transmitted(i: u32, world: vec3<f32>, n_vertex: vec3<f32>) -> Transmitt
 fn fs_transmitted(in: LitVarying, @builtin(front_facing) front: bool) -> LateralPair {
     let depth = dot(in.world - camera.position, camera.forward);
     let t = transmitted_light(in.world, oriented_normal(in, front));
-    return LateralPair(vec4<f32>(t.diffuse, depth), vec4<f32>(t.ballistic, depth));
+    return LateralPair(vec4<f32>(t.t.diffuse, depth), vec4<f32>(t.t.ballistic, f32(t.lit)));
 }
 
 // The surface at each texel, for `cs_transmitted` (transmitted_map/targets.rs, `TransmittedMapTargets`): the world
@@ -129,6 +140,7 @@ var<workgroup> lane_taps: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LA
 var<workgroup> lane_mass: array<vec2<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_diffuse: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 var<workgroup> lane_ballistic: array<vec3<f32>, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
+var<workgroup> lane_lit: array<u32, BLOCK_WIDTH * BLOCK_HEIGHT * TEXEL_LANES>;
 
 // The texel (relative to the dispatch's origin) of workgroup `group`'s `slot`.
 fn block_texel(group: vec3<u32>, slot: u32) -> vec3<u32> {
@@ -170,8 +182,8 @@ fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoca
     lane_mass[index] = lateral_mass;
     workgroupBarrier();
     // Lane i: the rest of light i's transmittance.
-    var t = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
-    if (translucent && lane < count) {
+    var t = TexelLight(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), 0u);
+    if (s.own && lane < count) {
         var sum = vec3<f32>(0.0);
         var mass = vec2<f32>(0.0);
         for (var k = 0u; k < per_light; k++) {
@@ -184,19 +196,21 @@ fn cs_transmitted(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoca
         given_mass = mass;
         t = light_transmitted(lane, s.world, s.normal);
     }
-    lane_diffuse[index] = t.diffuse;
-    lane_ballistic[index] = t.ballistic;
+    lane_diffuse[index] = t.t.diffuse;
+    lane_ballistic[index] = t.t.ballistic;
+    lane_lit[index] = t.lit;
     workgroupBarrier();
     if (!s.own || lane != 0u) {
         return;
     }
-    var out = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
+    var out = TexelLight(Transmitted(vec3<f32>(0.0), vec3<f32>(0.0)), 0u);
     for (var k = 0u; k < count; k++) {
-        out.diffuse += lane_diffuse[first_lane + k];
-        out.ballistic += lane_ballistic[first_lane + k];
+        out.t.diffuse += lane_diffuse[first_lane + k];
+        out.t.ballistic += lane_ballistic[first_lane + k];
+        out.lit |= lane_lit[first_lane + k];
     }
-    textureStore(map_out, s.texel, 0, vec4<f32>(out.diffuse, s.depth));
-    textureStore(map_out, s.texel, 1, vec4<f32>(out.ballistic, s.depth));
+    textureStore(map_out, s.texel, 0, vec4<f32>(out.t.diffuse, s.depth));
+    textureStore(map_out, s.texel, 1, vec4<f32>(out.t.ballistic, f32(out.lit)));
 }
 
 // Every layer of the map to nothing (depth 0), before the objects' dispatches write their
