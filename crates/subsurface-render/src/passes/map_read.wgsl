@@ -88,11 +88,12 @@ struct MapTexels {
 // Whether a map texel's light can stand for the pixel's: its surface lies within the tolerance
 // of the pixel's, extended as a plane to the texel's centre (a slanted surface keeps its texels,
 // a depth edge loses them), and no light reaches it directly that the pixel is shadowed from.
-fn texel_matches(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>, depth: f32, tolerance: f32) -> bool {
+// `lit`: the texel's `lit_code` (layer 1's `a`).
+fn texel_matches(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>, depth: f32, lit: f32, tolerance: f32) -> bool {
     if (depth <= 0.0 || abs(depth - plane_depth(screen, texel, scale)) > tolerance) {
         return false;
     }
-    return (u32(textureLoad(transmitted_map, texel, 1, 0).a) & ~screen.lit) == 0u;
+    return (u32(lit) & ~screen.lit) == 0u;
 }
 
 // The four texels around `screen`'s pixel that count with their bilinear weights where they
@@ -115,13 +116,14 @@ fn map_texels(screen: ScreenSample) -> MapTexels {
             continue;
         }
         let d = textureLoad(transmitted_map, texel, 0, 0);
-        if (!texel_matches(screen, texel, scale, d.w, tolerance)) {
+        let b = textureLoad(transmitted_map, texel, 1, 0);
+        if (!texel_matches(screen, texel, scale, d.w, b.a, tolerance)) {
             continue;
         }
         let w = select(1.0 - f.x, f.x, k % 2 == 1) * select(1.0 - f.y, f.y, k / 2 == 1);
         out.weight += w;
         out.diffuse += d.rgb * w;
-        out.ballistic += textureLoad(transmitted_map, texel, 1, 0).rgb * w;
+        out.ballistic += b.rgb * w;
         weights[k] = w;
         values[k] = d.rgb;
         top = max(top, d.rgb);
