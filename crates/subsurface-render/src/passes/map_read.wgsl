@@ -93,6 +93,12 @@ fn texel_matches(screen: ScreenSample, texel: vec2<i32>, scale: vec2<f32>, depth
     if (depth <= 0.0 || abs(depth - plane_depth(screen, texel, scale)) > tolerance) {
         return false;
     }
+    return reached_as_pixel(screen, lit);
+}
+
+// Whether no light reaches a texel of code `lit` (layer 1's `a`) directly that the pixel is
+// shadowed from (`lit_code`).
+fn reached_as_pixel(screen: ScreenSample, lit: f32) -> bool {
     return (u32(lit) & ~screen.lit) == 0u;
 }
 
@@ -181,7 +187,7 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
             }
             let d = textureLoad(transmitted_map, texel, 0, 0);
             let gap = abs(d.w - screen.depth);
-            if (d.w > 0.0 && gap < nearest.w && (u32(textureLoad(transmitted_map, texel, 1, 0).a) & ~screen.lit) == 0u) {
+            if (d.w > 0.0 && gap < nearest.w && reached_as_pixel(screen, textureLoad(transmitted_map, texel, 1, 0).a)) {
                 nearest = vec4<f32>(d.rgb, gap);
             }
         }
