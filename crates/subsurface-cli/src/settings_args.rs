@@ -92,11 +92,11 @@ pub struct SettingsArgs {
     /// [default: render.transmitted_map.texel_mm, 4].
     #[arg(long, value_name = "MM", alias = "lateral-texel-mm")]
     map_texel_mm: Option<f32>,
-    /// Diffusion: how the transmitted map is evaluated, compute (its raster pass records each
-    /// texel's surface, then a compute shader per object evaluates it; adapters without
-    /// storage textures fall back to fragment) or fragment (in the raster pass's fragment
-    /// shader); the same map at a different cost [default: render.transmitted_map.pass,
-    /// compute].
+    /// Diffusion: how the transmitted map is evaluated, auto (compute on GPUs, fragment on
+    /// CPU adapters such as lavapipe), compute (its raster pass records each texel's surface,
+    /// then a compute shader per object evaluates it; adapters without storage textures fall
+    /// back to fragment) or fragment (in the raster pass's fragment shader); the same map at a
+    /// different cost [default: render.transmitted_map.pass, auto].
     #[arg(long, value_name = "PASS", alias = "lateral-pass")]
     map_pass: Option<MapEvaluation>,
     /// Inward shift along the vertex normal before the shadow-map lookup, in scene units

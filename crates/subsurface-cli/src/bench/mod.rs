@@ -68,10 +68,10 @@ pub struct BenchArgs {
         alias = "lateral-texel-mm"
     )]
     map_texel_mm: Vec<f32>,
-    /// Diffusion runs: how the transmitted map is evaluated, compute and/or fragment,
-    /// comma-separated; the same map, so `compute,fragment` compares their cost [default: the
-    /// scene's render.transmitted_map.pass]. The table marks fragment runs
-    /// (`diffusion/12:8 frag`).
+    /// Diffusion runs: how the transmitted map is evaluated, compute, fragment and/or auto
+    /// (compute on GPUs, fragment on CPU adapters), comma-separated; the same map, so
+    /// `compute,fragment` compares their cost [default: the scene's
+    /// render.transmitted_map.pass]. The table marks fragment runs (`diffusion/12:8 frag`).
     #[arg(
         long,
         value_delimiter = ',',

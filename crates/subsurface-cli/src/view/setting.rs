@@ -226,7 +226,7 @@ mod tests {
         );
         assert_eq!(
             of("transmitted_map.pass"),
-            Kind::Choice(vec!["compute", "fragment"])
+            Kind::Choice(vec!["auto", "compute", "fragment"])
         );
         assert!(matches!(of("ambient"), Kind::Array(k) if k.len() == 3
             && k.iter().all(|k| matches!(k, Kind::Float { .. }))));

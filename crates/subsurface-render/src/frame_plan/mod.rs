@@ -186,8 +186,12 @@ impl FramePlan {
             TransmittedMapShape {
                 downsample: map_downsample,
                 layers,
-                compute: settings.transmitted_map.pass == MapEvaluation::Compute
-                    && features.compute_storage,
+                compute: features.compute_storage
+                    && match settings.transmitted_map.pass {
+                        MapEvaluation::Auto => !features.masked_branches,
+                        MapEvaluation::Compute => true,
+                        MapEvaluation::Fragment => false,
+                    },
             }
         };
         let source = match (diffusion, map_downsample > 1) {

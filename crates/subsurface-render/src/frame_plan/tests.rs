@@ -249,3 +249,33 @@ fn the_outline_pass_runs_where_the_map_is_read_and_asked_for() {
     assert!(!p.lighting.outline_pass);
     assert_eq!(p.outline_objects, vec![false; 2]);
 }
+
+/// By default the map is evaluated by compute shaders on a GPU and by the map's fragment shader
+/// on an adapter that masks its branches; an explicit choice holds on either, and an adapter
+/// without compute storage evaluates in the fragment shader whatever is asked.
+#[test]
+fn the_map_is_evaluated_in_compute_on_gpus_and_in_fragments_on_cpus() {
+    let scene = Scene::default_scene();
+    let mut s = high(&scene);
+    let cpu = AdapterFeatures {
+        masked_branches: true,
+        ..AdapterFeatures::ALL
+    };
+    let bare = AdapterFeatures {
+        compute_storage: false,
+        masked_branches: false,
+    };
+    assert_eq!(s.transmitted_map.pass, MapEvaluation::Auto);
+    let computed = |s: &RenderSettings, f: AdapterFeatures| {
+        let p = FramePlan::new(&scene, s, f);
+        assert!(p.map.layers > 0);
+        p.map.compute
+    };
+    assert!(computed(&s, AdapterFeatures::ALL));
+    assert!(!computed(&s, cpu));
+    s.transmitted_map.pass = MapEvaluation::Compute;
+    assert!(computed(&s, cpu));
+    assert!(!computed(&s, bare));
+    s.transmitted_map.pass = MapEvaluation::Fragment;
+    assert!(!computed(&s, AdapterFeatures::ALL));
+}

@@ -125,8 +125,9 @@ fn plain_step(read: u64, write: u64) -> PerPixel {
 /// The screen-space SSS passes with `settings` at `width` x `height` (the timed `sss`
 /// passes; the copy of the input that Hable's pass starts from is outside them), or None for
 /// methods that are not screen space. `pack_on_load`: the workgroup fetch's first pass packs
-/// its texels itself (`SssPass::pack_on_load`, the choice on GPUs) rather than after a pack
-/// step.
+/// its texels itself into workgroup memory (`SssPass::pack_on_load`, the choice on GPUs)
+/// rather than after a pack step, after which its taps read the packed texture as the packed
+/// fetch's do.
 pub fn sss_traffic(
     settings: &SssSettings,
     pack_on_load: bool,
@@ -156,13 +157,11 @@ pub fn sss_traffic(
             let taps = u64::from(settings.samples) - 1;
             let mut h = blur_step(t.tap, t.between, taps, 2);
             let mut v = blur_step(t.tap, t.last, taps, 2);
-            if settings.fetch == SssFetch::Workgroup {
+            if packs_as_it_loads {
                 // Each workgroup loads its stretch and both aprons once (taps past the apron,
                 // which read the texture, are left out).
                 let span = u64::from(sss::WORKGROUP_SPAN) / u64::from(sss::WORKGROUP_TILE);
-                if packs_as_it_loads {
-                    h.read = input;
-                }
+                h.read = input;
                 h.read_taps = h.read * span;
                 v.read_taps = t.tap * span;
             }
@@ -280,10 +279,10 @@ mod tests {
         assert_eq!(on_load.read_bytes, px * (20 + 16));
         assert_eq!(on_load.write_bytes, px * (16 + 8));
         assert_eq!(on_load.read_bytes_per_tap, px * (20 * 2 + 16 * 2));
-        // With a pack step first (on CPU adapters), as the packed fetch moves.
+        // With a pack step first (on CPU adapters) the taps read the packed texture: the
+        // packed fetch's traffic.
         let stepped = sss_traffic(&w, false, 100, 10).unwrap();
-        assert_eq!(stepped.bytes(), sep.bytes());
-        assert_eq!(stepped.read_bytes_per_tap, px * (20 + 2 * 16 * 2));
+        assert_eq!(stepped, sep);
         assert_eq!(g.write_bytes, px * (16 + 8 + 5 * 40 + 8));
 
         let copy = copy_traffic(1280, 720);

@@ -5,30 +5,41 @@ use serde::{Deserialize, Serialize};
 
 use super::{InvalidSetting, check};
 
-/// How the map's pass evaluates the transmitted map. Both give the same map
+/// How the map's pass evaluates the transmitted map. Each gives the same map
 /// (tests/transmittance.rs compares them); they differ in speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MapEvaluation {
+    /// `compute` on GPUs, `fragment` on adapters whose shaders run both sides of every branch
+    /// (CPU rasterisers such as lavapipe): the compute shader spreads each texel over eight
+    /// invocations, one per light for most of its work, and a CPU runs all eight in one vector
+    /// whether the scene has two lights or eight; the fragment shader gives each texel a lane
+    /// (docs/lab/performance.md, session 38).
+    #[default]
+    Auto,
     /// The map's raster pass only records each texel's surface (position, normal, object);
     /// one compute dispatch per object then evaluates every light's transmitted light there.
-    /// The default: on the data-centre GPUs measured so far a fragment shader's arithmetic
-    /// ran many times slower than a compute shader's, and the evaluation is nearly all
-    /// arithmetic (docs/lab/performance.md). Adapters without compute shaders and storage
-    /// textures evaluate in the fragment shader.
-    #[default]
+    /// On the data-centre GPUs measured so far a fragment shader's arithmetic ran many times
+    /// slower than a compute shader's, and the evaluation is nearly all arithmetic
+    /// (docs/lab/performance.md). Adapters without compute shaders and storage textures
+    /// evaluate in the fragment shader.
     Compute,
     /// The raster pass's fragment shader evaluates it at each texel (no surface targets).
     Fragment,
 }
 
 impl MapEvaluation {
-    /// Both evaluations.
-    pub const ALL: [MapEvaluation; 2] = [MapEvaluation::Compute, MapEvaluation::Fragment];
+    /// Every choice.
+    pub const ALL: [MapEvaluation; 3] = [
+        MapEvaluation::Auto,
+        MapEvaluation::Compute,
+        MapEvaluation::Fragment,
+    ];
 
     /// The name in scene files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
+            MapEvaluation::Auto => "auto",
             MapEvaluation::Compute => "compute",
             MapEvaluation::Fragment => "fragment",
         }
@@ -90,8 +101,8 @@ pub struct TransmittedMapSettings {
     /// runs everything at each of its pixels). 0: no map, everything at every pixel inside
     /// the lighting pass.
     pub texel_mm: f32,
-    /// Where the map is evaluated, `compute` (a compute shader on the texels' surfaces) or
-    /// `fragment` (the map's raster pass); the same map.
+    /// Where the map is evaluated: `auto`, `compute` (a compute shader on the texels'
+    /// surfaces) or `fragment` (the map's raster pass); the same map.
     pub pass: MapEvaluation,
     /// Where each light's chord runs at the pixels the map misses: `auto`, `lighting` (in the
     /// lighting pass) or `pass` (a pass of their own); the same image.

@@ -48,7 +48,7 @@ mod workgroup;
 
 use pipelines::{PipelineKey, Pipelines, Stage};
 
-use workgroup::Dispatch;
+use workgroup::{Dispatch, LineFetch};
 pub use workgroup::{LINE_SPAN as WORKGROUP_SPAN, LINE_TILE as WORKGROUP_TILE, pack_on_load_suits};
 
 /// The passes with the direct fetch (three textures per texel of a tap).
@@ -211,9 +211,10 @@ impl SssPass {
         Ok(pass)
     }
 
-    /// Whether the workgroup fetch's first compute pass packs its texels as it loads them
-    /// (true) or a pack step runs before it (false); the image is the same. The default
-    /// depends on the adapter: see [`pack_on_load_suits`].
+    /// Whether the workgroup fetch's first compute pass packs its texels as it loads them into
+    /// workgroup memory (true), or a pack step runs before the passes, which then read their
+    /// taps from the packed texture (false); the image is the same. The default depends on
+    /// the adapter: see [`pack_on_load_suits`].
     pub fn pack_on_load(&self) -> bool {
         self.pack_on_load
     }
@@ -453,7 +454,11 @@ impl SssPass {
                 .expect("prepared for compute")
         };
         let compute_step = |stage, uniform: usize, input, out_packed, out_color, horizontal| {
-            let from_inputs = matches!(input, workgroup::LineInput::Inputs { .. });
+            let fetch = match input {
+                workgroup::LineInput::Inputs { .. } => LineFetch::PackOnLoad,
+                workgroup::LineInput::Packed(_) if self.pack_on_load => LineFetch::Shared,
+                workgroup::LineInput::Packed(_) => LineFetch::Texture,
+            };
             let desc = workgroup::BindGroupDesc {
                 uniform: &self.uniforms[uniform],
                 table: &self.table,
@@ -468,10 +473,7 @@ impl SssPass {
                 bind_group: workgroup::bind_group(device, &parts().layout, &desc),
                 target: 0,
                 accum: false,
-                dispatch: Some(Dispatch {
-                    horizontal,
-                    from_inputs,
-                }),
+                dispatch: Some(Dispatch { horizontal, fetch }),
             }
         };
         // Target indices: 0 = the diffuse input (written in place), then intermediates; an
@@ -597,8 +599,7 @@ impl SssPass {
         }
         for s in &steps {
             if let Some(d) = s.dispatch {
-                self.pipelines
-                    .ensure_compute(device, s.key.stage, d.from_inputs);
+                self.pipelines.ensure_compute(device, s.key.stage, d.fetch);
             } else {
                 self.pipelines.ensure_render(device, s.key);
             }
@@ -662,7 +663,7 @@ impl SssPass {
                         label: Some("sss"),
                         timestamp_writes: timer.compute_writes(),
                     });
-                    pass.set_pipeline(self.pipelines.compute(s.key.stage, d.from_inputs));
+                    pass.set_pipeline(self.pipelines.compute(s.key.stage, d.fetch));
                     pass.set_bind_group(0, &s.bind_group, &[]);
                     pass.dispatch_workgroups(x, y, 1);
                 }

@@ -4,6 +4,7 @@
 use super::{FORMAT, PACKED_FORMAT, SHADER, SHADER_PACKED, SHADER_WORKGROUP, workgroup};
 use crate::passes::util;
 use crate::settings::SssFetch;
+use workgroup::LineFetch;
 
 /// Which pipeline a step runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,8 +68,8 @@ pub struct ComputeParts {
     /// Group 0 of the workgroup fetch's compute steps.
     pub layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// The compute pipelines, by stage and whether they pack the inputs as they load them.
-    pipelines: Vec<((Stage, bool), wgpu::ComputePipeline)>,
+    /// The compute pipelines, by stage and where their taps find their texels.
+    pipelines: Vec<((Stage, LineFetch), wgpu::ComputePipeline)>,
     pub dummies: workgroup::Dummies,
 }
 
@@ -160,11 +161,11 @@ impl Pipelines {
             .clone()
     }
 
-    /// Makes the compute pipeline of `stage` (separable, fixed or jittered), reading the
-    /// inputs or the packed texels, unless made before.
-    pub fn ensure_compute(&mut self, device: &wgpu::Device, stage: Stage, from_inputs: bool) {
+    /// Makes the compute pipeline of `stage` (separable, fixed or jittered) that finds its
+    /// texels as `fetch` says, unless made before.
+    pub fn ensure_compute(&mut self, device: &wgpu::Device, stage: Stage, fetch: LineFetch) {
         self.prepare_compute(device);
-        let key = (stage, from_inputs);
+        let key = (stage, fetch);
         let made = self.compute.as_ref().map(|c| &c.pipelines);
         if made.is_some_and(|p| p.iter().any(|(k, _)| *k == key)) {
             return;
@@ -176,7 +177,7 @@ impl Pipelines {
         };
         let parts = self.compute.as_mut().expect("prepared above");
         let layout = &parts.pipeline_layout;
-        let pipeline = workgroup::pipeline(device, &module, layout, entry, from_inputs);
+        let pipeline = workgroup::pipeline(device, &module, layout, entry, fetch);
         parts.pipelines.push((key, pipeline));
     }
 
@@ -185,9 +186,9 @@ impl Pipelines {
         &found.expect("resize makes every step's pipeline").1
     }
 
-    pub fn compute(&self, stage: Stage, from_inputs: bool) -> &wgpu::ComputePipeline {
+    pub fn compute(&self, stage: Stage, fetch: LineFetch) -> &wgpu::ComputePipeline {
         let parts = self.compute.as_ref();
-        let key = (stage, from_inputs);
+        let key = (stage, fetch);
         let found = parts.and_then(|c| c.pipelines.iter().find(|(k, _)| *k == key));
         &found.expect("resize makes every step's pipeline").1
     }

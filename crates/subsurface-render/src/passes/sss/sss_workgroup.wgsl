@@ -1,7 +1,8 @@
 
 // Separable SSS as compute passes over lines (rows for the horizontal pass, columns for the
-// vertical one): a workgroup loads its stretch of the line, plus an apron on each side, once
-// into workgroup memory, and every tap inside it reads from there instead of the texture. Taps
+// vertical one): on a GPU a workgroup loads its stretch of the line, plus an apron on each
+// side, once into workgroup memory, and every tap inside it reads from there instead of the
+// texture (on a CPU adapter every tap reads the texture: LINE_SHARED). Taps
 // past the apron (wide kernels seen up close) fall back to the texture. The result is the
 // fragment passes' to the bit: the same taps, corrections and bilinear weights.
 //
@@ -10,6 +11,12 @@
 // memory (the H200) a full-screen fragment pass costs several times what a compute pass over
 // the same pixels does.
 override FROM_INPUTS: bool = false;
+
+// Whether the workgroup loads its stretch into workgroup memory at all. CPU adapters run the
+// passes without it, after a pack step, each tap reading the packed texture: llvmpipe gathers
+// workgroup memory lane by lane, word by word, and its texel fetch was the faster of the two
+// (workgroup::LineFetch::Texture).
+override LINE_SHARED: bool = true;
 
 const LINE_TILE: u32 = 128u;
 const LINE_APRON: i32 = 64;
@@ -45,9 +52,11 @@ fn input_texel(texel: vec2<i32>) -> vec4<u32> {
 }
 
 fn line_fetch(along: i32, line: Line) -> vec4<u32> {
-    let k = along - (line.origin - LINE_APRON);
-    if (k >= 0 && k < i32(LINE_SPAN)) {
-        return line_texels[k];
+    if (LINE_SHARED) {
+        let k = along - (line.origin - LINE_APRON);
+        if (k >= 0 && k < i32(LINE_SPAN)) {
+            return line_texels[k];
+        }
     }
     return input_texel(line_texel(along, line));
 }
@@ -66,7 +75,7 @@ fn line_tap(q: f32, line: Line, c: Centre) -> vec3<f32> {
 }
 
 // Loads the workgroup's stretch and its apron (clamped at the line's ends, as `tap` clamps)
-// into workgroup memory.
+// into workgroup memory, where the line is shared.
 fn load_line(group: vec3<u32>, index: u32) -> Line {
     var size = extent();
     if (FROM_INPUTS) {
@@ -82,11 +91,13 @@ fn load_line(group: vec3<u32>, index: u32) -> Line {
         line.across = u.region.x + group.y;
         line.origin = i32(u.region.y + group.x * LINE_TILE);
     }
-    for (var k = index; k < LINE_SPAN; k += LINE_TILE) {
-        let along = clamp(line.origin - LINE_APRON + i32(k), 0, line.last);
-        line_texels[k] = input_texel(line_texel(along, line));
+    if (LINE_SHARED) {
+        for (var k = index; k < LINE_SPAN; k += LINE_TILE) {
+            let along = clamp(line.origin - LINE_APRON + i32(k), 0, line.last);
+            line_texels[k] = input_texel(line_texel(along, line));
+        }
+        workgroupBarrier();
     }
-    workgroupBarrier();
     return line;
 }
 
@@ -110,8 +121,14 @@ fn separable_line(group: vec3<u32>, index: u32, jittered: bool) {
     if (along > line.last || along >= end) {
         return;
     }
-    let c = centre_of(line_texels[u32(LINE_APRON) + index]);
     let texel = line_texel(along, line);
+    var t: vec4<u32>;
+    if (LINE_SHARED) {
+        t = line_texels[u32(LINE_APRON) + index];
+    } else {
+        t = input_texel(texel);
+    }
+    let c = centre_of(t);
     var sum = c.color;
     if (c.strength > 0.0) {
         let q = f32(along) + 0.5;

@@ -1,6 +1,7 @@
 //! The workgroup fetch's compute passes of Separable SSS (`sss_workgroup.wgsl`): a workgroup
 //! of [`LINE_TILE`] invocations per stretch of a row (horizontal pass) or column (vertical
-//! pass), which loads the stretch and an apron once into workgroup memory.
+//! pass), which loads the stretch and an apron once into workgroup memory on a GPU
+//! ([`LineFetch`]).
 
 use crate::passes::util;
 
@@ -9,23 +10,52 @@ pub const LINE_TILE: u32 = 128;
 /// Texels a workgroup loads: its pixels and a 64-texel apron each side (`LINE_SPAN`).
 pub const LINE_SPAN: u32 = 256;
 
-/// Whether the workgroup fetch's first pass should pack its texels as it loads them on this
-/// device, rather than after a pack step. On a GPU it should: the pack step is a full-screen
-/// fragment pass, and on the H200 it cost five times the two compute passes (0.26 of 0.31 ms
-/// at 1920x1080, docs/lab/performance.md, session 28). On a CPU rasteriser (lavapipe) it
-/// should not: llvmpipe runs both sides of a branch, so the fetch of a tap past the
-/// workgroup's apron, which then reads three textures instead of one packed texel, runs for
-/// every tap, and the blur took twice as long (13.2 against 6.3 ms at 640x360).
+/// Whether the workgroup fetch's first pass should pack its texels as it loads them into
+/// workgroup memory on this device, rather than after a pack step. On a GPU it should: the
+/// pack step is a full-screen fragment pass, and on the H200 it cost five times the two compute
+/// passes (0.26 of 0.31 ms at 1920x1080, docs/lab/performance.md, session 28). On a CPU
+/// rasteriser (lavapipe) it should not: llvmpipe runs both sides of a branch, so the fetch of
+/// a tap past the workgroup's apron, which then reads three textures instead of one packed
+/// texel, runs for every tap, and the blur took twice as long (13.2 against 6.3 ms at 640x360).
+/// Without packing on load the passes read the packed texels straight from the texture
+/// ([`LineFetch::Texture`]).
 pub fn pack_on_load_suits(device: &wgpu::Device) -> bool {
     device.adapter_info().device_type != wgpu::DeviceType::Cpu
+}
+
+/// Where a compute pass's taps find their texels; the same texels, so the same image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineFetch {
+    /// In workgroup memory, which the workgroup fills from the three inputs, packing each
+    /// texel as it loads it (the first pass on a GPU).
+    PackOnLoad,
+    /// In workgroup memory, which the workgroup fills from the packed texels (the second pass
+    /// on a GPU).
+    Shared,
+    /// In the packed texture, one load per tap, with no workgroup memory (both passes after a
+    /// pack step, on a CPU adapter): llvmpipe gathers a vector's workgroup-memory words lane by
+    /// lane, and reading the taps from the texture instead took the two passes from 15 to 9.5
+    /// ms at 640x360 (docs/lab/performance.md, session 38).
+    Texture,
+}
+
+impl LineFetch {
+    /// The pipeline-overridable constants of sss_workgroup.wgsl that select it.
+    fn constants(self) -> [(&'static str, f64); 2] {
+        let flag = |on: bool| f64::from(u8::from(on));
+        [
+            ("FROM_INPUTS", flag(self == LineFetch::PackOnLoad)),
+            ("LINE_SHARED", flag(self != LineFetch::Texture)),
+        ]
+    }
 }
 
 #[derive(Clone, Copy)]
 pub struct Dispatch {
     /// Along rows (the first pass) or columns (reading the first pass's output).
     pub horizontal: bool,
-    /// It packs the three inputs as it loads them (`FROM_INPUTS` in sss_workgroup.wgsl).
-    pub from_inputs: bool,
+    /// Where its taps find their texels.
+    pub fetch: LineFetch,
 }
 
 /// Group 0 of the compute passes: the uniform, the three inputs (colour, depth, SSS data: the
@@ -139,7 +169,7 @@ pub fn pipeline(
     module: &wgpu::ShaderModule,
     layout: &wgpu::PipelineLayout,
     entry: &str,
-    from_inputs: bool,
+    fetch: LineFetch,
 ) -> wgpu::ComputePipeline {
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
@@ -147,7 +177,7 @@ pub fn pipeline(
         module,
         entry_point: Some(entry),
         compilation_options: wgpu::PipelineCompilationOptions {
-            constants: &[("FROM_INPUTS", f64::from(u8::from(from_inputs)))],
+            constants: &fetch.constants(),
             // Every invocation writes its texels of the line before the barrier.
             zero_initialize_workgroup_memory: false,
         },
