@@ -34,8 +34,8 @@ pub enum LineFetch {
     Shared,
     /// In the packed texture, one load per tap, with no workgroup memory (both passes after a
     /// pack step, on a CPU adapter): llvmpipe gathers a vector's workgroup-memory words lane by
-    /// lane, and reading the taps from the texture instead took the two passes from 15 to 9.5
-    /// ms at 640x360 (docs/lab/performance.md, session 38).
+    /// lane, and reading the taps from the texture instead took the two passes from 15-20 to
+    /// 8-10.5 ms at 640x360 (docs/lab/performance.md, session 38).
     Texture,
 }
 
