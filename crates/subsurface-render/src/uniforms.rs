@@ -67,8 +67,8 @@ pub struct LightsUniform {
     pub transmittance: u32,
     /// Texels per axis averaged for thickness.
     pub thickness_filter: u32,
-    /// 1 = write the thickness instead of diffuse (`DebugView::Thickness`).
-    pub thickness_view: u32,
+    /// Padding (the thickness view is a pipeline constant, `THICKNESS_VIEW`).
+    pub _pad1: u32,
     /// Uniform ambient radiance, linear RGB.
     pub ambient: [f32; 3],
     /// Scene units the shaded point moves inward before the shadow-map lookup.
@@ -314,7 +314,6 @@ mod layout_tests {
                 count,
                 transmittance,
                 thickness_filter,
-                thickness_view,
                 ambient,
                 normal_shrink,
                 sss_runs,

@@ -459,10 +459,13 @@ fn axes_of(args: &BenchArgs) -> Vec<Axis> {
     .collect()
 }
 
-/// `s` without any skin effect: no scattering, no transmittance, no bounce.
+/// `s` without any skin effect: no scattering, no transmittance, no bounce, and no thin parts'
+/// reflectance, which `--sss none` keeps (it changes how much a thin part reflects, not where)
+/// and which costs the back faces' pass and its term in the lighting pass.
 fn without_skin(s: &RenderSettings) -> RenderSettings {
     let mut bare = s.clone();
     bare.sss.method = SssMethod::None;
+    bare.sss.thin_parts = false;
     bare.transmittance.method = TransmittanceMethod::Off;
     bare.bounce = BounceSettings::OFF;
     bare

@@ -101,6 +101,10 @@ pub struct LightingVariant {
     /// outline pass after the lighting pass (lighting.wgsl `OUTLINE_PASS`), not in this
     /// pipeline.
     pub outline_pass: bool,
+    /// The thickness debug view: the pipeline writes the thickness instead of the diffuse
+    /// light (lighting.wgsl `THICKNESS_VIEW`). Not a setting: [`FramePlan::new`] leaves it off
+    /// and the renderer sets it from its `DebugView`.
+    pub thickness_view: bool,
 }
 
 /// One frame's structure. Made by [`FramePlan::new`]; compared with the last frame's to
@@ -214,6 +218,7 @@ impl FramePlan {
                     OutlineChords::Lighting => false,
                     OutlineChords::Pass => true,
                 },
+            thickness_view: false,
         };
         let taps_objects = lateral_taps_objects(scene, settings, width, height, map_downsample);
         let outline_objects = skin_pixel_mm(scene, width, height)

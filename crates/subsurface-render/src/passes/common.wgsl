@@ -36,7 +36,7 @@ struct Lights {
     // 0 off, 1 Jimenez 2010, 2 Beer-Lambert, 3 the ad-hoc term of 001_*, 4 TSM, 5 diffusion
     transmittance: u32,
     thickness_filter: u32, // texels per axis averaged for thickness
-    thickness_view: u32,   // 1: write the thickness instead of diffuse (debug view)
+    _pad1: u32,
     ambient: vec3<f32>,
     normal_shrink: f32,    // scene units the shaded point moves inward before the lookup
     sss_runs: u32,         // 1: subsurface scattering runs (source_shadow in shadow_lookup.wgsl)

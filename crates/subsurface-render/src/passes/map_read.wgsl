@@ -75,6 +75,11 @@ fn map_depth_tolerance() -> f32 {
     return LATERAL_DEPTH_TOLERANCE / max(object.lateral_decay, 1e-3) * units_per_mm;
 }
 
+// Map texels per pixel, along x and y.
+fn map_scale() -> vec2<f32> {
+    return vec2<f32>(textureDimensions(transmitted_map)) / vec2<f32>(camera.viewport_x, camera.viewport_y);
+}
+
 // The four map texels around a pixel, from `base` (k = 0..3: base + (k % 2, k / 2)): the
 // bilinear weight of each that matches the pixel (`texel_matches`; 0 for the others),
 // their sum, and their diffuse and unscattered light so weighted.
@@ -107,7 +112,7 @@ fn reached_as_pixel(screen: ScreenSample, lit: f32) -> bool {
 // change, in the logarithm.
 fn map_texels(screen: ScreenSample) -> MapTexels {
     let size = vec2<i32>(textureDimensions(transmitted_map));
-    let scale = vec2<f32>(size) / vec2<f32>(camera.viewport_x, camera.viewport_y);
+    let scale = map_scale();
     let pos = screen.xy * scale - 0.5;
     var out = MapTexels(vec2<i32>(floor(pos)), 0.0, vec3<f32>(0.0), vec3<f32>(0.0));
     let f = pos - floor(pos);
@@ -162,22 +167,39 @@ fn map_texels(screen: ScreenSample) -> MapTexels {
 // texels come out more than `MAX_TEXEL_FACTOR` times coarser is drawn with a pipeline that
 // evaluates everything per pixel (LATERAL_SOURCE 2).
 fn transmitted_from_map(screen: ScreenSample) -> MapRead {
-    var out: Transmitted;
-    out.diffuse = vec3<f32>(0.0);
-    out.ballistic = vec3<f32>(0.0);
+    let read = transmitted_on_surface(screen);
+    if (read.on_surface) {
+        return read;
+    }
+    return MapRead(Transmitted(nearest_texel_light(screen), vec3<f32>(0.0)), false);
+}
+
+// The first half of `transmitted_from_map`: the four texels' light where they hold the pixel's
+// surface; zero and not on the surface where they do not. The lighting pass built with
+// OUTLINE_PASS stops here and leaves the rest to the outline pass, whose pixels are the only
+// ones that need it: a CPU rasteriser runs `nearest_texel_light`'s sixteen texels at every
+// pixel it is compiled into (about 18 ms of the default scene's 1280x720 lighting pass on
+// lavapipe, docs/lab/performance.md, session 39).
+fn transmitted_on_surface(screen: ScreenSample) -> MapRead {
+    let zero = Transmitted(vec3<f32>(0.0), vec3<f32>(0.0));
     if (object.translucency <= 0.0) {
-        return MapRead(out, true);
+        return MapRead(zero, true);
     }
     let around = map_texels(screen);
     if (around.weight >= LATERAL_MIN_WEIGHT) {
-        out.diffuse = around.diffuse / around.weight;
-        out.ballistic = around.ballistic / around.weight;
-        return MapRead(out, true);
+        return MapRead(Transmitted(around.diffuse / around.weight, around.ballistic / around.weight), true);
     }
-    let base = around.base;
+    return MapRead(zero, false);
+}
+
+// The diffuse light of the texel of the 4 x 4 around the pixel nearest its depth, among those
+// no light reaches that the pixel is shadowed from; zero where none lies within
+// LATERAL_NEAREST_TOLERANCES tolerances. Only the diffuse part: the pixel runs its own
+// unscattered and singly scattered light.
+fn nearest_texel_light(screen: ScreenSample) -> vec3<f32> {
+    let base = vec2<i32>(floor(screen.xy * map_scale() - 0.5));
     let size = vec2<i32>(textureDimensions(transmitted_map));
     let tolerance = map_depth_tolerance();
-    // Only the diffuse part: the pixel runs its own unscattered and singly scattered light.
     var nearest = vec4<f32>(0.0, 0.0, 0.0, LATERAL_NEAREST_TOLERANCES * tolerance);
     for (var j = -1; j < 3; j++) {
         for (var i = -1; i < 3; i++) {
@@ -192,6 +214,5 @@ fn transmitted_from_map(screen: ScreenSample) -> MapRead {
             }
         }
     }
-    return MapRead(Transmitted(nearest.rgb, vec3<f32>(0.0)), false);
+    return nearest.rgb;
 }
-

@@ -14,6 +14,12 @@ pub const LATERAL_SOURCE: &str = "LATERAL_SOURCE";
 /// Leaves each light's chord at the pixels the transmitted map misses to the outline pass
 /// (`frame_plan::LightingVariant::outline_pass`; lighting.wgsl, outline.wgsl).
 pub const OUTLINE_PASS: &str = "OUTLINE_PASS";
+/// Writes the thickness instead of the diffuse light (`DebugView::Thickness`;
+/// `frame_plan::LightingVariant::thickness_view`). A constant rather than a uniform: a CPU
+/// rasteriser runs a branch's code whether or not a pixel takes it, and the view's thickness
+/// lookups cost every frame of every view 14 ms of the default scene's 1280x720 lighting pass on
+/// lavapipe (docs/lab/performance.md, session 39).
+pub const THICKNESS_VIEW: &str = "THICKNESS_VIEW";
 /// Fixes where a pipeline's pixels take the bounce from (`frame_plan::LightingVariant::bounce`).
 pub const BOUNCE_SOURCE: &str = "BOUNCE_SOURCE";
 

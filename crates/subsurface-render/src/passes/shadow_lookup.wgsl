@@ -117,22 +117,6 @@ fn shadow_factor(light: Light, p: vec3<f32>) -> f32 {
     return lit / 9.0;
 }
 
-// Percentage-closer filtering over the 2x2 texels around `p` with bilinear weights: one
-// gather. The diffusion source's shifted lookups take it: what they feed is blurred by the
-// profile, which hides the narrower penumbra, and the tent's four gathers per lookup were
-// most of the shift's cost.
-fn shadow_factor_bilinear(light: Light, p: vec3<f32>) -> f32 {
-    let sc = shadow_coord(light, p);
-    if (!sc.inside) {
-        return 1.0;
-    }
-    let test = shadow_test(light, sc, p);
-    let f = test.texel - floor(test.texel);
-    let corner = (floor(test.texel) + vec2<f32>(1.0)) * light.atlas_texel;
-    let weights = gather_weights(vec2<f32>(1.0 - f.x, f.x), vec2<f32>(1.0 - f.y, f.y));
-    return dot(shadow_gather(corner, sc.layer, test.reference), weights);
-}
-
 // The optional terms this pipeline evaluates, a bit each (overrides.rs, `Terms`): 1
 // `diffusion`'s unscattered lobe, 2 its single scattering, 4 the diffusion source's shadow
 // along the refracted ray (source_shadow), 8 thin parts' reflectance (lighting.wgsl,
@@ -153,7 +137,7 @@ fn has_term(bit: u32) -> bool {
 fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, shadow: f32) -> vec3<f32> {
     let cos_i = dot(n_vertex, l);
     let scatters = lights.sss_runs != 0u && object.sss_strength > 0.0;
-    if (!has_term(TERM_SOURCE_SHIFT) || !scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0))) {
+    if (!has_term(TERM_SOURCE_SHIFT) || !scatters || cos_i <= 0.0 || any(object.extinction <= vec3<f32>(0.0)) || light.first_layer < 0.0) {
         return vec3<f32>(shadow);
     }
     let sin_t = sqrt(max(1.0 - cos_i * cos_i, 0.0)) / object.eta;
@@ -164,11 +148,57 @@ fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
         return vec3<f32>(shadow);
     }
     let step = along / len * (tan_t * object.world_per_mm);
-    let red = shadow_factor_bilinear(light, p + step / object.extinction.x);
+    // The three entry points lie on one line through p, and a light's projection is linear
+    // before its divide: p's clip position, its biased one and the step's clip offset serve
+    // all three, where a lookup of its own per point would fetch the light's matrix and
+    // project twice (on lavapipe that was half the shift's cost, 17 ms of the default
+    // scene's 1280x720 lighting pass, docs/lab/performance.md, session 39). The shift is
+    // millimetres: the bias keeps p's direction to the light, and a point light keeps p's
+    // cube face (an entry point beyond that face's edge reads as lit).
+    var face = 0u;
+    if (light.kind == KIND_POINT) {
+        face = cube_face(p - light.position);
+    }
+    let m = face_matrix(light, face);
+    let on_p = ShiftedLookup(
+        m * vec4<f32>(p, 1.0),
+        m * vec4<f32>(p + l * light.shadow_bias, 1.0),
+        m * vec4<f32>(step, 0.0),
+        i32(light.first_layer) + i32(face),
+    );
+    let red = shifted_shadow(light, on_p, 1.0 / object.extinction.x);
     if (red == shadow) {
         return vec3<f32>(shadow);
     }
-    let green = shadow_factor_bilinear(light, p + step / object.extinction.y);
-    let blue = shadow_factor_bilinear(light, p + step / object.extinction.z);
+    let green = shifted_shadow(light, on_p, 1.0 / object.extinction.y);
+    let blue = shifted_shadow(light, on_p, 1.0 / object.extinction.z);
     return vec3<f32>(red, green, blue);
+}
+
+// p on a light's map for `source_shadow`: its clip position, that of p moved the shadow bias
+// toward the light, the clip offset of one refraction step, and the layer.
+struct ShiftedLookup {
+    clip: vec4<f32>,
+    biased: vec4<f32>,
+    step: vec4<f32>,
+    layer: i32,
+};
+
+// Percentage-closer filtering over the 2x2 texels around p moved `steps` refraction steps,
+// with bilinear weights: one gather. What the shifted lookups feed is blurred by the profile,
+// which hides the narrower penumbra, and `shadow_factor`'s tent of four gathers per lookup was
+// most of the shift's cost.
+fn shifted_shadow(light: Light, at: ShiftedLookup, steps: f32) -> f32 {
+    let clip = at.clip + at.step * steps;
+    let uv = clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    if (clip.w <= 0.0 || any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) {
+        return 1.0;
+    }
+    let biased = at.biased + at.step * steps;
+    let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
+    let texel = uv * (light.shadow_uv_scale / light.atlas_texel) - vec2<f32>(0.5);
+    let f = texel - floor(texel);
+    let corner = (floor(texel) + vec2<f32>(1.0)) * light.atlas_texel;
+    let weights = gather_weights(vec2<f32>(1.0 - f.x, f.x), vec2<f32>(1.0 - f.y, f.y));
+    return dot(shadow_gather(corner, at.layer, reference), weights);
 }

@@ -209,15 +209,11 @@ fn plan_frame(
     scene: &Scene,
     options: &RenderOptions,
 ) -> Result<(FramePlan, gpu_scene::LightSetup), RenderError> {
-    let plan = FramePlan::new(scene, &options.settings, AdapterFeatures::of(&ctx.device));
+    let mut plan = FramePlan::new(scene, &options.settings, AdapterFeatures::of(&ctx.device));
+    plan.lighting.thickness_view = options.view == DebugView::Thickness;
     let mut lights = gpu_scene::light_setup(scene, &options.settings)?;
     plan.write_lights(&mut lights.uniform);
-    lights.uniform.thickness_view = thickness_flag(options.view);
     Ok((plan, lights))
-}
-
-fn thickness_flag(view: DebugView) -> u32 {
-    (view == DebugView::Thickness) as u32
 }
 
 impl Renderer {

@@ -217,6 +217,10 @@ fn radiant_transmittance(i: u32, world: vec3<f32>, n_vertex: vec3<f32>, v: vec3<
 // only where the pixels are.
 override OUTLINE_PASS: bool = false;
 
+// The thickness debug view (overrides.rs, THICKNESS_VIEW): the diffuse target holds the
+// thickness the transmittance sees, in profile mm (tonemap.wgsl draws it).
+override THICKNESS_VIEW: bool = false;
+
 // Every light's contribution at `world`. The UV-space irradiance pass calls it too, so both
 // see the same lights, shadows and transmittance.
 // `screen`: where `world` is the pixel's surface, `diffusion` may read its transmitted light
@@ -238,8 +242,8 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     // view and the thin rim make an outline's transmitted light change within a texel, and the
     // nearest texel alone, lying further in, left the finger's light-side outline at -27 %
     // against the path tracer instead of -17 % (docs/lab/fidelity.md, finding 14).
-    // With OUTLINE_PASS the chords are left to the outline pass (outline.wgsl), and the
-    // nearest texel's diffuse light stands here alone.
+    // With OUTLINE_PASS the chords and the nearest texel are both left to the outline pass
+    // (outline.wgsl), which adds the larger; this pass adds no transmitted light there.
     let from_map = TRANSMITTANCE_METHOD == TRANSMITTANCE_DIFFUSION && LATERAL_SOURCE == LATERAL_MAP;
     let chords_here = !(from_map && OUTLINE_PASS);
     var shadows: array<f32, MAX_LIGHTS>;
@@ -270,7 +274,11 @@ fn shade(world: vec3<f32>, n: vec3<f32>, n_vertex: vec3<f32>, v: vec3<f32>, m: f
     if (from_map) {
         var at = screen;
         at.lit = lit;
-        mapped = transmitted_from_map(at);
+        if (OUTLINE_PASS) {
+            mapped = transmitted_on_surface(at);
+        } else {
+            mapped = transmitted_from_map(at);
+        }
     }
     if (!mapped.on_surface && chords_here) {
         for (var i = 0u; i < count; i++) {
@@ -339,7 +347,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
         }
         out.diffuse = vec4<f32>(albedo * ((s.irradiance + lights.ambient + bounce) * thin + s.transmitted + s.tsm), 1.0);
     }
-    if (lights.thickness_view != 0u) {
+    if (THICKNESS_VIEW) {
         // Thickness debug view (tonemap.wgsl reads it back from diffuse.r).
         out.diffuse = vec4<f32>(min_thickness_mm(in.world, n_vertex), 0.0, 0.0, 1.0);
     }
@@ -349,7 +357,7 @@ fn fs_main(in: LitVarying, @builtin(front_facing) front: bool) -> GBuffer {
     out.specular = vec4<f32>(min(s.specular, vec3<f32>(HALF_MAX)), 1.0);
     out.depth = depth;
     // a: where the outline pass adds the chords (its full-screen mark reads it).
-    let outline = s.outline && ts.x <= 0.5 && lights.thickness_view == 0u;
+    let outline = s.outline && ts.x <= 0.5 && !THICKNESS_VIEW;
     out.sss = vec4<f32>(object.sss_strength, object.world_per_mm, f32(object.profile), select(0.0, 1.0, outline));
     return out;
 }

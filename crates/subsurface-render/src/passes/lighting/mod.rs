@@ -37,7 +37,8 @@ use crate::gpu::GpuContext;
 use crate::gpu::object::GpuObject;
 use crate::passes::maps;
 use crate::passes::overrides::{
-    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, OUTLINE_PASS, TRANSMITTANCE_METHOD, lateral,
+    BOUNCE_SOURCE, DIFFUSION_TERMS, LATERAL_SOURCE, OUTLINE_PASS, THICKNESS_VIEW,
+    TRANSMITTANCE_METHOD, lateral,
 };
 use crate::passes::transmitted_map::TransmittedMapPass;
 use crate::passes::util;
@@ -172,13 +173,14 @@ fn lighting_pipeline(
 }
 
 /// The overrides that build the lighting shader's entry points for `variant`.
-fn variant_constants(variant: LightingVariant) -> [(&'static str, f64); 5] {
+fn variant_constants(variant: LightingVariant) -> [(&'static str, f64); 6] {
     [
         (TRANSMITTANCE_METHOD, f64::from(variant.method)),
         (BOUNCE_SOURCE, f64::from(variant.bounce)),
         (LATERAL_SOURCE, f64::from(variant.lateral)),
         (DIFFUSION_TERMS, f64::from(variant.terms.0)),
         (OUTLINE_PASS, f64::from(u8::from(variant.outline_pass))),
+        (THICKNESS_VIEW, f64::from(u8::from(variant.thickness_view))),
     ]
 }
 

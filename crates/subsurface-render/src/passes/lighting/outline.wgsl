@@ -1,10 +1,11 @@
 // The outline pass: each light's chord (`transmittance`, without taps) at the pixels where the
 // transmitted map holds no texel of the pixel's surface (an outline, a depth edge), drawn after
 // the lighting pass over the skin with the same vertex stage and z-buffer and added to its
-// targets. The lighting pass, built with OUTLINE_PASS, wrote there the diffuse light of the
-// nearest texel in depth; shade() inline keeps the larger of that and the chords' sum, so this
-// pass adds the excess. The same image as the chords inline, without their code in the
-// lighting pass's shader (frame_plan::LightingVariant::outline_pass).
+// targets. The lighting pass, built with OUTLINE_PASS, added no transmitted light there: this
+// pass adds the larger of the chords' sum and the diffuse light of the nearest texel in depth,
+// as shade() inline keeps it. The same image as the chords inline, without their code, or the
+// nearest texel's search, in the lighting pass's shader
+// (frame_plan::LightingVariant::outline_pass).
 //
 // The lighting pass marks those pixels in its SSS target's `a`; a full-screen draw
 // (outline_mark.wgsl) copies the mark into the z-buffer's stencil, and fs_outline draws the
@@ -43,10 +44,10 @@ fn fs_outline(in: LitVarying, @builtin(front_facing) front: bool) -> OutlineOut 
         diffuse += radiance * t.diffuse;
         specular += radiance * t.ballistic;
     }
-    let nearest = transmitted_from_map(screen).t.diffuse;
+    let nearest = nearest_texel_light(screen);
     var out: OutlineOut;
-    let excess = albedo * max(diffuse - nearest, vec3<f32>(0.0));
-    out.diffuse = vec4<f32>(min(excess, vec3<f32>(HALF_MAX)), 0.0);
+    let transmitted = albedo * max(diffuse, nearest);
+    out.diffuse = vec4<f32>(min(transmitted, vec3<f32>(HALF_MAX)), 0.0);
     out.specular = vec4<f32>(min(specular, vec3<f32>(HALF_MAX)), 0.0);
     return out;
 }
