@@ -534,6 +534,39 @@ struct Plan {
 mod tests {
     use super::*;
 
+    /// The bare frame runs none of the skin's passes or terms at any preset: no blur, no
+    /// transmitted map, no bounce, no thin parts (whose back faces' pass `--sss none` alone
+    /// keeps), so `skin_ms` holds all of them.
+    #[test]
+    fn the_bare_frame_has_no_skin_pass_or_term() {
+        use subsurface_render::frame_plan::{AdapterFeatures, FramePlan};
+        use subsurface_render::passes::overrides::Terms;
+        let scene = Scene::default_scene();
+        for quality in Quality::ALL {
+            let bare = without_skin(&RenderSettings::preset(quality));
+            let plan = FramePlan::new(&scene, &bare, AdapterFeatures::ALL);
+            assert_eq!(bare.sss.method, SssMethod::None, "{quality:?}");
+            assert!(
+                !plan.thin_parts(),
+                "{quality:?}: thin parts in the bare frame"
+            );
+            assert_eq!(plan.map.layers, 0, "{quality:?}: a transmitted map");
+            assert_eq!(plan.bounce_ring, 0, "{quality:?}: the bounce");
+            assert_eq!(
+                plan.lighting.method,
+                TransmittanceMethod::Off.code(),
+                "{quality:?}: transmittance"
+            );
+            let skin_terms = Terms::THIN_PARTS | Terms::SOURCE_SHIFT;
+            assert_eq!(
+                plan.lighting.terms.0 & skin_terms,
+                0,
+                "{quality:?}: {:?}",
+                plan.lighting.terms
+            );
+        }
+    }
+
     /// The grid keeps the characters' footprint: n copies, each 1/columns the size, inside
     /// the original bounds (plus rounding).
     #[test]
