@@ -51,4 +51,6 @@ pub use materials::{
 };
 pub use medium::{Coefficients, Medium};
 pub use slab::{SlabTransmittance, slab_radiance};
-pub use transport::{SlabResult, SlabSolver, TransportTable, fresnel_inside, slab_transport};
+pub use transport::{
+    Reflection, SlabResult, SlabSolver, TransportTable, fresnel_inside, slab_transport,
+};

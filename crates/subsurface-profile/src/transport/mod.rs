@@ -77,6 +77,17 @@ pub struct SlabResult {
     pub inside_radiance: Vec<f64>,
 }
 
+/// What a half-space of one channel's medium reflects of collimated light at some incidence
+/// (`SlabSolver::half_space_reflection`), per unit irradiance on its surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reflection {
+    /// Scattered light leaving the lit face, as a flux: every order of scattering.
+    pub reflected: f64,
+    /// Its radiance outside at [`SlabSolver::EXIT_ANGLES`] evenly spaced cosines of the exit
+    /// direction, from grazing (0) to the normal (1).
+    pub radiance: Vec<f64>,
+}
+
 /// The diffuse transmittance of a medium per channel: light scattered two or more times
 /// through a slab `s` mm thick (the renderer adds single scattering and the unscattered beam
 /// with their own directions), as a flux per incident irradiance, at `i / (points - 1) *

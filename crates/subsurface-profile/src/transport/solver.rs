@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use super::matrix::Mat;
-use super::{SlabResult, fresnel_inside};
+use super::{Reflection, SlabResult, fresnel_inside};
 use crate::error::{Result, count, in_range, positive};
 
 /// Gauss-Legendre nodes and weights on `[lo, hi]` (Newton's iteration on `P_n`).
@@ -33,6 +33,11 @@ fn gauss_legendre(n: usize, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     }
     (x, w)
 }
+
+/// The half-space's depth in optical depths. A conservative medium (albedo 1) has no half-space
+/// limit short of everything reflected; 4096 optical depths is far past every measured
+/// medium's decay.
+const DEEP: f64 = 4096.0;
 
 /// A homogeneous layer's response: diffuse radiance in, diffuse radiance out (`r`, `t` are the
 /// diffuse radiance the collimated beam of unit irradiance makes; `beam` what of it is left).
@@ -103,8 +108,9 @@ impl SlabSolver {
     /// single scattering in closed form (the isotropic source `a / 2 sum_j w_j L_j` per optical
     /// depth, azimuth integrated, and `a / (4 pi)` per unit beam irradiance, attenuated along
     /// both legs exactly), so the layer errs by double scattering, O(delta^2), even for the
-    /// grazing nodes whose paths `delta / mu` are long.
-    fn thin(&self, albedo: f64, delta: f64) -> Layer {
+    /// grazing nodes whose paths `delta / mu` are long. The beam travels at `mu0` inside
+    /// (1: normal incidence).
+    fn thin(&self, albedo: f64, delta: f64, mu0: f64) -> Layer {
         let n = self.n();
         let mut r_mat = Mat::zeros(n);
         let mut t_mat = Mat::zeros(n);
@@ -144,26 +150,22 @@ impl SlabSolver {
         for i in 0..n {
             t_mat.a[i * n + i] += (-delta / self.mu[i]).exp();
         }
-        // The beam at mu = 1, irradiance 1: the same legs with mu_j = 1, per unit radiance
-        // integral 1 / (4 pi), scaled alike (2 pi times the sum is the scattered flux).
-        let beam_legs: Vec<(f64, f64)> = (0..n).map(|i| leg(self.mu[i], 1.0)).collect();
-        let sent = 2.0 * PI * albedo / (4.0 * PI) * out_flux(&|i| beam_legs[i].0 + beam_legs[i].1);
-        let taken = albedo * (1.0 - (-delta).exp());
+        // The beam at mu0, irradiance 1 on the layer's face (1 / mu0 across the beam): the same
+        // legs with mu_j = mu0, per unit radiance integral 1 / (4 pi), scaled alike (2 pi
+        // times the sum is the scattered flux).
+        let beam_legs: Vec<(f64, f64)> = (0..n).map(|i| leg(self.mu[i], mu0)).collect();
+        let per_area = albedo / (4.0 * PI * mu0);
+        let sent = 2.0 * PI * per_area * out_flux(&|i| beam_legs[i].0 + beam_legs[i].1);
+        let taken = albedo * (1.0 - (-delta / mu0).exp());
         let norm = if sent > 0.0 { taken / sent } else { 1.0 };
-        let r: Vec<f64> = beam_legs
-            .iter()
-            .map(|l| albedo * l.1 / (4.0 * PI) * norm)
-            .collect();
-        let t: Vec<f64> = beam_legs
-            .iter()
-            .map(|l| albedo * l.0 / (4.0 * PI) * norm)
-            .collect();
+        let r: Vec<f64> = beam_legs.iter().map(|l| per_area * l.1 * norm).collect();
+        let t: Vec<f64> = beam_legs.iter().map(|l| per_area * l.0 * norm).collect();
         Layer {
             r_mat,
             t_mat,
             r,
             t,
-            beam: (-delta).exp(),
+            beam: (-delta / mu0).exp(),
         }
     }
 
@@ -205,10 +207,10 @@ impl SlabSolver {
     /// A layer of `tau` optical depths: 2^k thin layers doubled, the thin one at most
     /// `THIN` optical depths (its double scattering, O(THIN^2) a layer, adds up to O(THIN)
     /// relative; much thinner and rounding in the near-identity transmission takes over).
-    fn layer(&self, albedo: f64, tau: f64) -> Layer {
+    fn layer(&self, albedo: f64, tau: f64, mu0: f64) -> Layer {
         const THIN: f64 = 1e-5;
         let k = (tau / THIN).log2().ceil().clamp(0.0, 60.0) as i32;
-        let mut l = self.thin(albedo, tau * 0.5f64.powi(k));
+        let mut l = self.thin(albedo, tau * 0.5f64.powi(k), mu0);
         for _ in 0..k {
             l = self.add(&l, &l);
         }
@@ -216,8 +218,44 @@ impl SlabSolver {
     }
 
     /// The layer between two Fresnel faces: the diffuse field that the faces reflect back in
-    /// is bounced through the layer to every order (a 2N x 2N system).
+    /// is bounced through the layer to every order.
     fn with_faces(&self, l: &Layer, albedo: f64, tau: f64) -> SlabResult {
+        let n = self.n();
+        let x = self.face_fields(l);
+        let entry = 1.0 - fresnel_inside(self.eta, 1.0);
+        // Scattered once and straight out: the beam's source a / (4 pi) e^-t integrated along
+        // each direction to the far face, (e^-tau - e^(-tau / mu)) / (1 - mu) / (4 pi) * a.
+        let once: Vec<f64> = self
+            .mu
+            .iter()
+            .map(|&mu| {
+                let path = if (1.0 - mu).abs() < 1e-9 {
+                    tau * (-tau).exp()
+                } else {
+                    ((-tau).exp() - (-tau / mu).exp()) / (1.0 - mu)
+                };
+                albedo * path / (4.0 * PI)
+            })
+            .collect();
+        let multiple: Vec<f64> = (0..n).map(|i| x[i] - once[i]).collect();
+        SlabResult {
+            transmitted: entry * self.face_flux(&x[..n]),
+            transmitted_once: entry * self.face_flux(&once),
+            reflected: entry * self.face_flux(&x[n..]),
+            unscattered: entry * l.beam * entry,
+            exit_radiance: self.exit_radiance(&multiple, entry),
+            inside_radiance: (0..Self::EXIT_ANGLES)
+                .map(|k| {
+                    entry * self.field_at(&multiple, k as f64 / (Self::EXIT_ANGLES - 1) as f64)
+                })
+                .collect(),
+        }
+    }
+
+    /// The diffuse fields just inside the two faces of layer `l` between Fresnel faces, the
+    /// field the faces reflect back in bounced through the layer to every order (a 2N x 2N
+    /// system): `[down at the far face; up at the lit face]`, per quadrature direction.
+    fn face_fields(&self, l: &Layer) -> Vec<f64> {
         let n = self.n();
         // Unknowns: x = [down at the far face; up at the lit face], both just inside.
         // down = t + T F up + R F down;  up = r + R F up + T F down.
@@ -239,41 +277,15 @@ impl SlabSolver {
             a.a[i * m + i] += 1.0;
             a.a[(n + i) * m + n + i] += 1.0;
         }
-        let x = a.solve_vec(&rhs);
-        let entry = 1.0 - fresnel_inside(self.eta, 1.0);
-        let flux = |v: &[f64]| {
-            2.0 * PI
-                * (0..n)
-                    .map(|i| self.w[i] * self.mu[i] * (1.0 - self.fresnel[i]) * v[i])
-                    .sum::<f64>()
-        };
-        // Scattered once and straight out: the beam's source a / (4 pi) e^-t integrated along
-        // each direction to the far face, (e^-tau - e^(-tau / mu)) / (1 - mu) / (4 pi) * a.
-        let once: Vec<f64> = self
-            .mu
-            .iter()
-            .map(|&mu| {
-                let path = if (1.0 - mu).abs() < 1e-9 {
-                    tau * (-tau).exp()
-                } else {
-                    ((-tau).exp() - (-tau / mu).exp()) / (1.0 - mu)
-                };
-                albedo * path / (4.0 * PI)
-            })
-            .collect();
-        let multiple: Vec<f64> = (0..n).map(|i| x[i] - once[i]).collect();
-        SlabResult {
-            transmitted: entry * flux(&x[..n]),
-            transmitted_once: entry * flux(&once),
-            reflected: entry * flux(&x[n..]),
-            unscattered: entry * l.beam * entry,
-            exit_radiance: self.exit_radiance(&multiple, entry),
-            inside_radiance: (0..Self::EXIT_ANGLES)
-                .map(|k| {
-                    entry * self.field_at(&multiple, k as f64 / (Self::EXIT_ANGLES - 1) as f64)
-                })
-                .collect(),
-        }
+        a.solve_vec(&rhs)
+    }
+
+    /// The flux that the field `v` just inside a face sends out through it.
+    fn face_flux(&self, v: &[f64]) -> f64 {
+        2.0 * PI
+            * (0..self.n())
+                .map(|i| self.w[i] * self.mu[i] * (1.0 - self.fresnel[i]) * v[i])
+                .sum::<f64>()
     }
 
     /// The field `down` (per quadrature direction) toward cosine `mu` to the normal: linear
@@ -312,7 +324,7 @@ impl SlabSolver {
         in_range("albedo", albedo, 0.0, 1.0)?;
         positive("s_mm", s_mm)?;
         let tau = sigma_t * s_mm;
-        Ok(self.with_faces(&self.layer(albedo, tau), albedo, tau))
+        Ok(self.with_faces(&self.layer(albedo, tau, 1.0), albedo, tau))
     }
 
     /// Slabs `i * step_mm` thick for `i` in `1..=steps`: one layer of `step_mm` doubled once,
@@ -328,7 +340,7 @@ impl SlabSolver {
         in_range("albedo", albedo, 0.0, 1.0)?;
         positive("step_mm", step_mm)?;
         count("steps", steps, 1, 1 << 16)?;
-        let step = self.layer(albedo, sigma_t * step_mm);
+        let step = self.layer(albedo, sigma_t * step_mm, 1.0);
         let mut l = step.clone();
         let mut out = Vec::with_capacity(steps);
         for i in 1..=steps {
@@ -345,11 +357,33 @@ impl SlabSolver {
     pub fn diffuse_reflectance(&self, sigma_t: f64, albedo: f64) -> Result<f64> {
         positive("sigma_t", sigma_t)?;
         in_range("albedo", albedo, 0.0, 1.0)?;
-        // A conservative medium (albedo 1) has no half-space limit short of everything
-        // reflected; 4096 optical depths is far past every measured medium's decay.
-        const DEEP: f64 = 4096.0;
         Ok(self
-            .with_faces(&self.layer(albedo, DEEP), albedo, DEEP)
+            .with_faces(&self.layer(albedo, DEEP, 1.0), albedo, DEEP)
             .reflected)
+    }
+
+    /// The half-space lit at `cos_outside` to its normal (outside, before refraction): the
+    /// scattered flux it reflects and its radiance at [`Self::EXIT_ANGLES`] evenly spaced exit
+    /// cosines outside (0 grazing to 1 the normal), every order of scattering, per unit
+    /// irradiance on the surface, the entry's Fresnel reflection taken off. A Lambertian
+    /// surface of the normal-incidence `diffuse_reflectance` R_d would give R_d and R_d / pi.
+    pub fn half_space_reflection(
+        &self,
+        sigma_t: f64,
+        albedo: f64,
+        cos_outside: f64,
+    ) -> Result<Reflection> {
+        positive("sigma_t", sigma_t)?;
+        in_range("albedo", albedo, 0.0, 1.0)?;
+        in_range("cos_outside", cos_outside, 1e-3, 1.0)?;
+        let eta2 = self.eta * self.eta;
+        let mu0 = (1.0 - (1.0 - cos_outside * cos_outside) / eta2).sqrt();
+        let x = self.face_fields(&self.layer(albedo, DEEP, mu0));
+        let entry = 1.0 - fresnel_inside(self.eta, mu0);
+        let up = &x[self.n()..];
+        Ok(Reflection {
+            reflected: entry * self.face_flux(up),
+            radiance: self.exit_radiance(up, entry),
+        })
     }
 }
