@@ -154,7 +154,8 @@ fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     // project twice (on lavapipe that was half the shift's cost, 17 ms of the default
     // scene's 1280x720 lighting pass, docs/lab/performance.md, session 39). The shift is
     // millimetres: the bias keeps p's direction to the light, and a point light keeps p's
-    // cube face (an entry point beyond that face's edge reads as lit).
+    // cube face (an entry point beyond that face's edge takes p's own shadow, the unshifted
+    // answer, rather than a seam of light).
     var face = 0u;
     if (light.kind == KIND_POINT) {
         face = cube_face(p - light.position);
@@ -166,12 +167,12 @@ fn source_shadow(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
         m * vec4<f32>(step, 0.0),
         i32(light.first_layer) + i32(face),
     );
-    let red = shifted_shadow(light, on_p, 1.0 / object.extinction.x);
+    let red = shifted_shadow(light, on_p, 1.0 / object.extinction.x, shadow);
     if (red == shadow) {
         return vec3<f32>(shadow);
     }
-    let green = shifted_shadow(light, on_p, 1.0 / object.extinction.y);
-    let blue = shifted_shadow(light, on_p, 1.0 / object.extinction.z);
+    let green = shifted_shadow(light, on_p, 1.0 / object.extinction.y, shadow);
+    let blue = shifted_shadow(light, on_p, 1.0 / object.extinction.z, shadow);
     return vec3<f32>(red, green, blue);
 }
 
@@ -187,12 +188,13 @@ struct ShiftedLookup {
 // Percentage-closer filtering over the 2x2 texels around p moved `steps` refraction steps,
 // with bilinear weights: one gather. What the shifted lookups feed is blurred by the profile,
 // which hides the narrower penumbra, and `shadow_factor`'s tent of four gathers per lookup was
-// most of the shift's cost.
-fn shifted_shadow(light: Light, at: ShiftedLookup, steps: f32) -> f32 {
+// most of the shift's cost. `own`: p's shadow, for a point off the map (beyond the cube face
+// p lies on, or beyond a spot light's frustum, where its cone gives no light anyway).
+fn shifted_shadow(light: Light, at: ShiftedLookup, steps: f32, own: f32) -> f32 {
     let clip = at.clip + at.step * steps;
     let uv = clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
     if (clip.w <= 0.0 || any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) {
-        return 1.0;
+        return own;
     }
     let biased = at.biased + at.step * steps;
     let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
