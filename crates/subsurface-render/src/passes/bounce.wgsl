@@ -38,7 +38,7 @@ fn bounce_rows(p: vec3<f32>, n: vec3<f32>, first_row: u32, stride: u32) -> vec3<
         if (clip.w <= 0.0) {
             continue;
         }
-        let uv = clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+        let uv = clip_to_map(clip);
         // Texels per side of the finest cell (bounce.rs, base_texels): the atlas's size over
         // the pyramid's.
         let base_texels = 1.0 / (light.atlas_texel * f32(textureDimensions(flux_position).x));

@@ -36,6 +36,17 @@ struct ShadowCoord {
     inside: bool,
 };
 
+// Where a light camera's clip position (w > 0) falls on its map, 0..1: texture v runs down
+// where clip y runs up. Every lookup of the lights' maps goes through it.
+fn clip_to_map(clip: vec4<f32>) -> vec2<f32> {
+    return clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+}
+
+// The depth a biased clip position is compared with; past the far plane nothing was drawn.
+fn compared_depth(biased: vec4<f32>) -> f32 {
+    return min(biased.z / max(biased.w, 1e-20), 1.0);
+}
+
 fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     var sc: ShadowCoord;
     sc.inside = false;
@@ -53,8 +64,7 @@ fn shadow_coord(light: Light, p: vec3<f32>) -> ShadowCoord {
     if (clip.w <= 0.0) {
         return sc;
     }
-    let ndc = clip.xyz / clip.w;
-    sc.uv = ndc.xy * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    sc.uv = clip_to_map(clip);
     sc.layer = i32(light.first_layer) + i32(face);
     sc.face = face;
     sc.inside = all(sc.uv >= vec2<f32>(0.0)) && all(sc.uv <= vec2<f32>(1.0));
@@ -83,7 +93,7 @@ fn shadow_test(light: Light, sc: ShadowCoord, p: vec3<f32>) -> ShadowTest {
     let to_light = light_direction(light.kind, light.position, light.direction, p);
     let biased = face_matrix(light, sc.face) * vec4<f32>(p + to_light * light.shadow_bias, 1.0);
     let size = light.shadow_uv_scale / light.atlas_texel; // this light's map size in texels
-    return ShadowTest(sc.uv * size - vec2<f32>(0.5), min(biased.z / max(biased.w, 1e-20), 1.0));
+    return ShadowTest(sc.uv * size - vec2<f32>(0.5), compared_depth(biased));
 }
 
 // Percentage-closer filtering over a 3x3 texel area with bilinear weights: a tent of 4x4
@@ -192,12 +202,11 @@ struct ShiftedLookup {
 // p lies on, or beyond a spot light's frustum, where its cone gives no light anyway).
 fn shifted_shadow(light: Light, at: ShiftedLookup, steps: f32, own: f32) -> f32 {
     let clip = at.clip + at.step * steps;
-    let uv = clip.xy / clip.w * vec2<f32>(0.5, -0.5) + vec2<f32>(0.5);
+    let uv = clip_to_map(clip);
     if (clip.w <= 0.0 || any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) {
         return own;
     }
-    let biased = at.biased + at.step * steps;
-    let reference = min(biased.z / max(biased.w, 1e-20), 1.0);
+    let reference = compared_depth(at.biased + at.step * steps);
     let texel = uv * (light.shadow_uv_scale / light.atlas_texel) - vec2<f32>(0.5);
     let f = texel - floor(texel);
     let corner = (floor(texel) + vec2<f32>(1.0)) * light.atlas_texel;
