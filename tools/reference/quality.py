@@ -64,6 +64,7 @@ CONFIGS = [
     ("high, 1-texel thickness", "high", ["transmittance.thickness_filter=1"]),
     ("high, no thin parts", "high", ["sss.thin_parts=false"]),
     ("high, no side walls", "high", ["transmittance.side_walls=false"]),
+    ("high, no lit side", "high", ["transmittance.lit_side=false"]),
     ("high, paper transmittance", "high", ["transmittance.method=paper"]),
     ("no skin effects", "high", ["sss.method=none", "transmittance.method=off", "bounce.ring=0"]),
 ]

@@ -12,6 +12,7 @@ mod bounce;
 mod extremes;
 mod fuzz_inputs;
 mod gpu;
+mod lit_side;
 mod mesh_fuzz;
 mod mesh_hardening;
 mod outline;

@@ -31,3 +31,4 @@ const TERM_SINGLE_SCATTERING: u32 = 2u;
 const TERM_SOURCE_SHIFT: u32 = 4u;
 const TERM_THIN_PARTS: u32 = 8u;
 const TERM_SIDE_WALLS: u32 = 16u;
+const TERM_LIT_SIDE: u32 = 32u;

@@ -30,16 +30,17 @@ const EXPONENTIAL_FULL: f32 = 8.0;
 const EXPONENTIAL_FLOOR: f32 = 1e-3;
 
 // Which lights reach a point directly on a surface facing them (bit i for light i): there a
-// light's transmitted light is zero (`transmittance`: the point is its own entry), a step the
-// light's terminator draws across the map's smooth field. The map pass stores each texel's code
+// light's chord gives nothing (`transmittance`: the point is its own entry) and only the lit
+// side's light remains (lit_side.wgsl), a step the light's terminator draws across the map's
+// smooth field. The map pass stores each texel's code
 // in layer 1's `a` (transmitted_map.wgsl), and a pixel takes no texel that a light reaches
 // where the pixel is in that light's shadow: the unlit pixels within a texel of a terminator
 // blended in the lit texels' zero (a backlit chicken1 ball's light-side outline read -55 %
 // against the path tracer, evaluated per pixel -40 %, now -37 %). The other way round a lit
-// pixel keeps its unlit texels' light: per pixel it would get none, but near a terminator the
-// path tracer shows light that entered the hidden faces beside it (the reflected misses of
-// docs/lab/suite.md), and without it the canonical hand's fingers lost a point (-24.4 to -25.4 %
-// at `medium`, session 37).
+// pixel keeps its unlit texels' light: per pixel it would get only the lit side's, but near a
+// terminator the path tracer shows light on both sides of it (docs/lab/suite.md, session 39),
+// and without it the canonical hand's fingers lost a point (-24.4 to -25.4 % at `medium`,
+// session 37).
 fn lit_code(code: u32, i: u32, facing: f32, shadow: f32) -> u32 {
     return select(code, code | (1u << i), facing > 0.0 && shadow >= 0.5);
 }

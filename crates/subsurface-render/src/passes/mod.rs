@@ -1,9 +1,9 @@
 //! One module per pass, each with its WGSL beside it.
 
 /// The lighting shader's WGSL files in order (ids, common declarations, groups 0 and 1, lighting,
-/// shadow lookups, transmittance, its side walls and its unscattered light, bounce), then
-/// `$extra` (more WGSL, e.g. `include_str!` of a pass's entry points): the one list every pass
-/// built on the lighting shader starts from.
+/// shadow lookups, transmittance, its side walls, its lit side and its unscattered light,
+/// bounce), then `$extra` (more WGSL, e.g. `include_str!` of a pass's entry points): the one
+/// list every pass built on the lighting shader starts from.
 macro_rules! lighting_shader {
     ($($extra:expr),* $(,)?) => {
         concat!(
@@ -15,6 +15,7 @@ macro_rules! lighting_shader {
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/shadow_lookup.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/transmittance.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/side_walls.wgsl")),
+            include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/lit_side.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/unscattered.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/map_read.wgsl")),
             include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/src/passes/bounce.wgsl")),

@@ -74,8 +74,11 @@ impl Terms {
     /// The side walls of a part narrower than the light's spread take their share of the
     /// chord's and the lateral taps' light (side_walls.wgsl `side_wall_share`).
     pub const SIDE_WALLS: u32 = 16;
+    /// A point the light reaches takes the light of the beam beneath it beyond the
+    /// half-space's (lit_side.wgsl `lit_side_light`).
+    pub const LIT_SIDE: u32 = 32;
     /// Every term.
-    pub const ALL: Self = Self(31);
+    pub const ALL: Self = Self(63);
 
     /// The terms `settings` asks for.
     pub fn of(settings: &crate::settings::RenderSettings) -> Self {
@@ -85,6 +88,7 @@ impl Terms {
             bit(t.ballistic, Self::BALLISTIC)
                 | bit(t.single_scattering, Self::SINGLE_SCATTERING)
                 | bit(t.side_walls, Self::SIDE_WALLS)
+                | bit(t.lit_side, Self::LIT_SIDE)
                 // Without a blur the shift has nothing to feed (the shader tests it at run time
                 // too), but code a pipeline holds costs even where it does not run: on
                 // llvmpipe, whose branches mask rather than jump, the unreached lookups were a
@@ -165,6 +169,7 @@ mod tests {
             ("TERM_SOURCE_SHIFT", Terms::SOURCE_SHIFT),
             ("TERM_THIN_PARTS", Terms::THIN_PARTS),
             ("TERM_SIDE_WALLS", Terms::SIDE_WALLS),
+            ("TERM_LIT_SIDE", Terms::LIT_SIDE),
         ]);
         for (name, value) in &expected {
             assert_eq!(ids.get(*name), Some(value), "{name} in ids.wgsl");

@@ -436,6 +436,11 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     // crosses: skip the thickness lookup and its N x N shadow-map loads. Every directly lit
     // pixel of a front-lit frame takes this exit.
     let facing = dot(n_vertex, l);
+    // A point the light reaches also takes the light of the beam beneath it, where the part
+    // carries more of it than the half-space the profile assumes (lit_side.wgsl).
+    if (method == TRANSMITTANCE_DIFFUSION && facing > 0.0 && lit > 0.0 && has_term(TERM_LIT_SIDE)) {
+        out.diffuse = lit_side_light(light, p, n_vertex, l) * lit;
+    }
     if ((method == TRANSMITTANCE_DIFFUSION && facing > 0.0 && lit >= 1.0) || (method != TRANSMITTANCE_DIFFUSION && facing >= 0.3)) {
         return out;
     }
@@ -531,7 +536,7 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
                     }
                     diffuse = max(diffuse * kept, shape * lateral * lateral_kept);
                 }
-                out.diffuse = diffuse * unlit;
+                out.diffuse += diffuse * unlit;
                 var ballistic = vec3<f32>(0.0);
                 if (has_term(TERM_BALLISTIC)) {
                     ballistic = unscattered_light(light, p, n_vertex, l, v, s_mm);

@@ -50,6 +50,7 @@ pub const SETTINGS: &[SettingDoc] = &[
     doc("transmittance.ballistic", "", "diffusion: unscattered light through thin parts"),
     doc("transmittance.single_scattering", "", "diffusion: light scattered once through thin parts"),
     doc("transmittance.side_walls", "", "diffusion: the sides of narrow parts take their share of the light through them"),
+    doc("transmittance.lit_side", "", "diffusion: lit points take the light beneath them beyond the half-space's"),
     doc("transmitted_map.texel_mm", "mm", "diffusion and bounce: map texel on the skin, 0..=50 (0: per pixel)"),
     doc("transmitted_map.pass", "", "diffusion and bounce: compute or fragment evaluation of the map"),
     doc("transmitted_map.outlines", "", "diffusion: chords where the map misses, in the lighting pass or a pass (same image)"),
@@ -250,7 +251,8 @@ impl RenderSettings {
             k if k.starts_with("transmitted_map.") => t == TransmittanceMethod::Diffusion,
             "transmittance.ballistic"
             | "transmittance.single_scattering"
-            | "transmittance.side_walls" => t == TransmittanceMethod::Diffusion,
+            | "transmittance.side_walls"
+            | "transmittance.lit_side" => t == TransmittanceMethod::Diffusion,
             "transmittance.method" => true,
             k if k.starts_with("transmittance.") => t != TransmittanceMethod::Off,
             "bounce.cell_mm" => self.bounce.enabled(),

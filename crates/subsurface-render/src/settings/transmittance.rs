@@ -98,6 +98,10 @@ pub struct TransmittanceSettings {
     /// of images, less what a like part across a narrow gap sends back; without it, the chord's
     /// light is scaled by the share of the lateral taps' kernel that the part covers.
     pub side_walls: bool,
+    /// `diffusion`: a point the light reaches directly also takes the light of the beam
+    /// beneath it, where the part holds more of it than the half-space the profile assumes
+    /// (the lit side of a rod near its terminator, in a medium whose light crosses the rod).
+    pub lit_side: bool,
 }
 
 impl Default for TransmittanceSettings {
@@ -110,6 +114,7 @@ impl Default for TransmittanceSettings {
             ballistic: true,
             single_scattering: true,
             side_walls: true,
+            lit_side: true,
         }
     }
 }
