@@ -433,8 +433,9 @@ fn transmittance(light: Light, p: vec3<f32>, n_vertex: vec3<f32>, l: vec3<f32>, 
     }
     // Where the method's own back-irradiance factor is zero (`diffusion`: a point the light
     // reaches directly on a surface facing it; the others: the wrap 0.3 - n.l), nothing
-    // crosses along the chord: skip the thickness lookup and its N x N shadow-map loads. Every directly lit
-    // pixel of a front-lit frame takes this exit, after the lit side's march below.
+    // crosses along the chord: skip the thickness lookup and its N x N shadow-map loads.
+    // Every directly lit pixel of a front-lit frame takes this exit, after the lit side's
+    // march below.
     let facing = dot(n_vertex, l);
     // A point the light reaches also takes the light of the beam beneath it, where the part
     // carries more of it than the half-space the profile assumes (lit_side.wgsl).
