@@ -65,6 +65,7 @@ CONFIGS = [
     ("high, no thin parts", "high", ["sss.thin_parts=false"]),
     ("high, no side walls", "high", ["transmittance.side_walls=false"]),
     ("high, no lit side", "high", ["transmittance.lit_side=false"]),
+    ("high, per pixel", "high", ["transmitted_map.texel_mm=0"]),
     ("high, paper transmittance", "high", ["transmittance.method=paper"]),
     ("no skin effects", "high", ["sss.method=none", "transmittance.method=off", "bounce.ring=0"]),
 ]
