@@ -19,10 +19,10 @@ Run from the repository root with a `subsurface` binary (SUBSURFACE_BIN, else ta
 target/debug) and Mitsuba 3 (`python3 -m pip install mitsuba==3.9.1`; libllvm19 for the fast
 variant). The head scenes need ../shared/assets (the Lee Perry-Smith head).
 
-The grid is not the full cross product: `DESIGN` (suite_design.py) lists the scenes, chosen so that every
-medium, shape and light direction appears, and so that the classes the canonical set missed
-(thick parts lit from behind off the axis, in several media; outlines the light grazes) are
-crossed with several media each.
+The grid is not the full cross product: `DESIGN` (suite_design.py) lists the scenes, chosen so
+that every medium, shape and light direction appears, and so that the classes the canonical set
+missed (thick parts lit from behind off the axis, in several media; outlines the light grazes)
+are crossed with several media each.
 
 Regions are computed from the geometry, not drawn (suite_regions.py): each scene is exported with
 `subsurface export-mitsuba`, and a ray is cast through every pixel centre of the exported
