@@ -3,6 +3,7 @@
 
     python3 tools/reference/confinement_mc.py [--media skin1,skin2] [--radii 3,5,8]
         [--shapes cylinder,sphere] [--channels 0,1] [--photons 500000] [--out FILE.json]
+    python3 tools/reference/confinement_mc.py --against references/confinement_mc.json [--out FILE.json]
 
 A Monte Carlo random walk (numpy) in a homogeneous medium with a smooth dielectric boundary
 and an isotropic phase function, sigma_s' used as sigma_s as the exporter does (similarity
@@ -259,6 +260,35 @@ def point(job):
             "part": part, "slab": slab, "ratio": ratio, "ratio_stderr": ratio_se, "renderer_ratio": ours}
 
 
+def against(a):
+    """The renderer's part / slab at each point of a walk's table, without walking again: what a
+    change to the renderer does to its agreement with the walk, in seconds."""
+    with open(a.against) as f:
+        doc = json.load(f)
+    extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
+    off = []
+    for pt in doc["points"]:
+        c = "RGB".index(pt["channel"])
+        q = renderer_centre(pt["medium"], "slab", pt["radius_mm"], extra)[c]
+        ours = float(renderer_centre(pt["medium"], pt["shape"], pt["radius_mm"], extra)[c] / q) if q > 0 else None
+        pt["renderer_ratio"] = ours
+        walk_ratio, se = pt["ratio"], pt["ratio_stderr"]
+        line = f"{pt['medium']:9} {pt['shape']:8} R {pt['radius_mm']:4.1f} mm {pt['channel']}  walk "
+        line += "-" if walk_ratio is None else f"{walk_ratio:.3f} +- {se:.3f}"
+        line += "  renderer -" if ours is None else f"  renderer {ours:.3f}"
+        if ours is not None and walk_ratio:
+            line += f"  ({ours / walk_ratio:.2f}x)"
+            if se is not None and se < 0.1 * walk_ratio:
+                off.append(abs(ours / walk_ratio - 1.0))
+        print(line, flush=True)
+    if off:
+        print(f"mean |renderer / walk - 1| over the {len(off)} points the walk knows to 10 %: "
+              f"{sum(off) / len(off):.3f}")
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(doc, f, indent=1)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--media", default="skin1,skin2")
@@ -274,7 +304,13 @@ def main():
                         "target/release/subsurface, --sss none) and give its ratio beside the walk's")
     p.add_argument("--renderer-args", default="", help="extra arguments to the renderer, e.g. '--quality high'")
     p.add_argument("--out", default="", help="write the points as JSON here")
+    p.add_argument("--against", metavar="JSON",
+                   help="walk nothing: render the points of this table (e.g. references/confinement_mc.json) "
+                        "with the renderer and print its ratio beside the walk's, with the ratio of the two; "
+                        "--out then writes the table with the renderer's column refreshed")
     a = p.parse_args()
+    if a.against:
+        return against(a)
     for m in a.media.split(","):
         if m not in MEDIA:
             sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
