@@ -4,6 +4,7 @@
     python3 tools/reference/confinement_mc.py [--media skin1,skin2] [--radii 3,5,8]
         [--shapes cylinder,sphere] [--channels 0,1] [--photons 500000] [--out FILE.json]
     python3 tools/reference/confinement_mc.py --against references/confinement_mc.json [--out FILE.json]
+    python3 tools/reference/confinement_mc.py --tilts 15,35 [--renderer] [--media ...] [--out FILE.json]
 
 A Monte Carlo random walk (numpy) in a homogeneous medium with a smooth dielectric boundary
 and an isotropic phase function, sigma_s' used as sigma_s as the exporter does (similarity
@@ -57,16 +58,44 @@ def fresnel_out(cos_i, eta):
     return r, cos_t
 
 
-def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed):
+def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed, tilt_deg=0.0, at=0.0):
     """Radiance toward +u at the front pole, per unit of beam cross-section (arbitrary units,
-    the same for every shape)."""
+    the same for every shape). `tilt_deg`: the beam turned that far off +u toward +v (a
+    cylinder's or a sphere's light off the axis; the slab is lit head-on only). `at`: the
+    window's middle along v, in radii (0: the pole)."""
     rng = np.random.default_rng(seed)
     n = photons
     sigma_t = sigma_s + sigma_a
     albedo = sigma_s / sigma_t
-    # Where the beam enters, and the outward normal there. Coordinates: u along the beam, v
-    # across it, w along a cylinder's axis.
-    if shape == "slab":
+    incident = np.tile([1.0, 0.0, 0.0], (n, 1))
+    # Where the beam enters, and the outward normal there. Coordinates: u toward the front pole
+    # (the camera), v across, w along a cylinder's axis.
+    if tilt_deg and shape != "slab":
+        a = np.radians(tilt_deg)
+        beam = np.array([np.cos(a), np.sin(a), 0.0])
+        across = np.array([-np.sin(a), np.cos(a), 0.0])
+        if shape == "cylinder":
+            x, w = rng.uniform(-radius, radius, n), np.zeros(n)
+            beam_area = 2.0 * radius
+        else:
+            rr = radius * np.sqrt(rng.random(n))
+            ph = rng.uniform(0.0, 2.0 * np.pi, n)
+            x, w = rr * np.cos(ph), rr * np.sin(ph)
+            beam_area = np.pi * radius * radius
+        # The beam's line through (x across, w) meets the part first where it enters.
+        q = x[:, None] * across[None, :] + w[:, None] * np.array([0.0, 0.0, 1.0])[None, :]
+        axes = 2 if shape == "cylinder" else 3
+        c = np.sum(q[:, :axes] ** 2, 1) - radius * radius
+        t0 = -np.sqrt(np.maximum(-c, 0.0))
+        pos = q + t0[:, None] * beam[None, :]
+        normal = pos.copy()
+        if shape == "cylinder":
+            normal[:, 2] = 0.0
+        normal /= radius
+        window_area = 2.0 * window if shape == "cylinder" else (2.0 * window) ** 2
+        incident = np.tile(beam, (n, 1))
+        u, v = pos[:, 0], pos[:, 1]
+    elif shape == "slab":
         half = 8.0 * radius
         v = rng.uniform(-half, half, n)
         w = np.zeros(n)
@@ -87,13 +116,12 @@ def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed):
         beam_area, window_area = np.pi * radius * radius, (2.0 * window) ** 2
         normal = np.stack([u, v, w], 1) / radius
     pos = np.stack([u, v, w], 1)
-    cos_i = -normal[:, 0]
+    cos_i = -np.sum(incident * normal, 1)
     sin_t = np.sqrt(np.maximum(1.0 - cos_i * cos_i, 0.0)) / eta
     cos_t = np.sqrt(1.0 - sin_t * sin_t)
     rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
     rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
     weight = 1.0 - 0.5 * (rs * rs + rp * rp)
-    incident = np.tile([1.0, 0.0, 0.0], (n, 1))
     d = incident / eta + (cos_i / eta - cos_t)[:, None] * normal
     d /= np.linalg.norm(d, axis=1)[:, None]
     alive = np.ones(n, bool)
@@ -156,7 +184,7 @@ def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed):
             # Any point of the slab's front face sees the same light: score all of them.
             window_area = beam_area
         else:
-            seen &= np.abs(pos[out, 1]) < window
+            seen &= np.abs(pos[out, 1] - at * radius) < window
         if shape == "sphere":
             seen &= np.abs(pos[out, 2]) < window
         score += np.bincount(out[seen] % 10, weights=weight[out[seen]], minlength=10)
@@ -181,7 +209,7 @@ transmittance = {{ normal_shrink = 0.0005 }}
 
 [[lights]]
 kind = "spot"
-position = [0.0, 0.0, -0.35]
+position = [{light_x}, 0.0, {light_z}]
 target = [0.0, 0.0, 0.0]
 intensity = 3.675
 inner_angle_deg = 9.0
@@ -203,7 +231,7 @@ specular = 1.0
 
 
 @functools.lru_cache(maxsize=None)
-def renderer_centre(medium, shape, radius, extra):
+def renderer_centre(medium, shape, radius, extra, tilt_deg=0.0, at=0.0, window=None):
     """The renderer's linear radiance (R, G, B) at the middle of the part, seen from the
     front with the light straight behind it: `subsurface compare --linear` on a 128 x 128
     frame 4 R wide, read over the pixels whose chord is within 1 % of the diameter (a
@@ -220,7 +248,11 @@ def renderer_centre(medium, shape, radius, extra):
     with tempfile.TemporaryDirectory() as tmp:
         scene = os.path.join(tmp, "part.toml")
         with open(scene, "w") as f:
-            f.write(SCENE.format(fov=fov, mesh=mesh, sa=list(sa), ss=list(ss), eta=eta))
+            # The light behind, turned off the axis about the cylinder's axis (the middle's
+            # light is the same either way round).
+            a = np.radians(tilt_deg)
+            f.write(SCENE.format(fov=fov, mesh=mesh, sa=list(sa), ss=list(ss), eta=eta,
+                                 light_x=-0.35 * np.sin(a), light_z=-0.35 * np.cos(a)))
         # compare wants a reference of the frame's size; any one does, its figures are unused.
         ref = os.path.join(tmp, "ref.exr")
         mi.Bitmap(np.zeros((128, 128, 3), dtype=np.float32)).write(ref)
@@ -238,7 +270,13 @@ def renderer_centre(medium, shape, radius, extra):
     # chord within 1 % of the diameter.
     half = 4
     rows = slice(32, 96) if shape == "cylinder" else slice(64 - half, 64 + half)
-    return img[rows, 64 - half:64 + half].reshape(-1, 3).mean(0)
+    if window is None:
+        return img[rows, 64 - half:64 + half].reshape(-1, 3).mean(0)
+    # The walk's window (`at` radii across, `window` mm either side) in pixels: 32 a radius.
+    x = 64.0 + 32.0 * at
+    w = max(32.0 * window / radius, 0.5)
+    cols = slice(int(round(x - w)), int(round(x + w)))
+    return img[rows, cols].reshape(-1, 3).mean(0)
 
 
 def point(job):
@@ -258,6 +296,50 @@ def point(job):
             "sigma_s_prime": ss[channel], "sigma_a": sa[channel],
             "sigma_tr": float(np.sqrt(3 * sa[channel] * (sa[channel] + ss[channel]))),
             "part": part, "slab": slab, "ratio": ratio, "ratio_stderr": ratio_se, "renderer_ratio": ours}
+
+
+def tilt_point(job):
+    medium, shape, radius, channel, tilts, a, seed = job
+    ss, sa, eta = MEDIA[medium]
+    # (tilt, window) pairs: the pole lit on the axis first, then each tilt at each window.
+    cases = [(0.0, 0.0)] + [(t, x) for t in tilts[1:] for x in a.at]
+    walks = [walk(shape, radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone, seed, t, x)
+             for t, x in cases]
+    extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
+    ours = None
+    if a.renderer:
+        ours = [renderer_centre(medium, shape, radius, extra, t, x, a.window)[channel] for t, x in cases]
+    return medium, shape, radius, channel, cases, walks, ours
+
+
+def tilts(a):
+    """Each part's middle (or the windows `--at` across it) lit off the axis over its middle lit
+    on it, the walk's and the renderer's."""
+    angles = [0.0] + [float(t) for t in a.tilts.split(",") if float(t) != 0.0]
+    jobs = [(m, sh, float(r), int(c), angles, a, 1000 * i)
+            for i, (m, sh, r, c) in enumerate((m, sh, r, c) for m in a.media.split(",")
+                                              for sh in a.shapes.split(",") for r in a.radii.split(",")
+                                              for c in a.channels.split(","))]
+    points = []
+    with ProcessPoolExecutor(a.jobs) as ex:
+        for medium, shape, radius, channel, cases, walks, ours in ex.map(tilt_point, jobs):
+            w0, s0 = walks[0]
+            for k, (t, x) in enumerate(cases[1:], 1):
+                wk, sk = walks[k]
+                ratio = wk / w0
+                se = ratio * np.hypot(sk / wk, s0 / w0) if wk > 0 else 0.0
+                pt = {"medium": medium, "shape": shape, "radius_mm": radius, "channel": "RGB"[channel],
+                      "tilt_deg": t, "at_radii": x, "walk_ratio": ratio, "walk_stderr": se,
+                      "renderer_ratio": None if ours is None or ours[0] <= 0 else float(ours[k] / ours[0])}
+                points.append(pt)
+                line = (f"{medium:9} {shape:8} R {radius:4.1f} mm {pt['channel']}  {t:4.0f} deg  at {x:+.2f} R  "
+                        f"walk {ratio:.3f} +- {se:.3f}")
+                if pt["renderer_ratio"] is not None:
+                    line += f"  renderer {pt['renderer_ratio']:.3f}  ({pt['renderer_ratio'] / ratio:.2f}x)"
+                print(line, flush=True)
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump({"photons": a.photons, "window_mm": a.window, "cone": a.cone, "tilts": points}, f, indent=1)
 
 
 def against(a):
@@ -308,9 +390,19 @@ def main():
                    help="walk nothing: render the points of this table (e.g. references/confinement_mc.json) "
                         "with the renderer and print its ratio beside the walk's, with the ratio of the two; "
                         "--out then writes the table with the renderer's column refreshed")
+    p.add_argument("--tilts", metavar="DEG,DEG",
+                   help="instead of part / slab: the part's middle with the beam turned this far off the "
+                        "axis (about a cylinder's axis), over its middle lit on the axis, for the walk and "
+                        "(with --renderer) the renderer: how the light through a part falls as the light "
+                        "moves off the axis behind it")
+    p.add_argument("--at", default="0", help="with --tilts: where the window lies across the part, in radii "
+                   "(comma-separated; 0 the pole, + away from the light)")
     a = p.parse_args()
+    a.at = [float(x) for x in a.at.split(",")]
     if a.against:
         return against(a)
+    if a.tilts:
+        return tilts(a)
     for m in a.media.split(","):
         if m not in MEDIA:
             sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
