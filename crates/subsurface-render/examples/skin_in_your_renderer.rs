@@ -29,9 +29,8 @@ use std::error::Error;
 use std::path::PathBuf;
 
 use glam::{Mat4, Vec3, Vec4};
-use wgpu::util::DeviceExt;
 
-use subsurface_render::gpu_scene::{camera_uniform, object_uniform, world_per_mm};
+use subsurface_render::gpu_scene::camera_uniform;
 use subsurface_render::lights::light_setup;
 use subsurface_render::material::{MaterialCache, ProfileTable};
 use subsurface_render::passes::bounce::FluxPyramid;
@@ -39,51 +38,21 @@ use subsurface_render::passes::lighting::{self, ShadowMaps};
 use subsurface_render::passes::shadow_entry::{EntryLayer, ShadowEntryPass};
 use subsurface_render::passes::sss::{SssInputs, SssPass};
 use subsurface_render::passes::tonemap::{self, ToneMapInputs, ToneMapPass};
-use subsurface_render::passes::transmitted_light::{SkinGBuffer, SkinMedium, TransmittedLightPass};
+use subsurface_render::passes::transmitted_light::{SkinGBuffer, TransmittedLightPass};
 use subsurface_render::passes::{maps, util};
 use subsurface_render::timing::{self, PassTiming, TimedPass};
 use subsurface_render::uniforms::{CameraUniform, LightsUniform};
 use subsurface_render::{DebugView, GpuContext, RenderError, RenderSettings, Scene, readback};
 
+// The program's own uniform blocks, meshes and lights (a folder, so that Cargo does not take the
+// file for an example of its own).
+#[path = "skin_in_your_renderer/forward.rs"]
+mod forward;
+use forward::{ViewUniform, buffer, draw, uniform_group};
+
 /// The program's own shaders: a depth-only shadow pass, a G-buffer pre-pass and a forward
 /// pass (Lambert diffuse, a Beckmann specular lobe, 3x3 percentage-closer shadows).
 const FORWARD_WGSL: &str = include_str!("skin_in_your_renderer.wgsl");
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ViewUniform {
-    view_proj: [[f32; 4]; 4],
-    position: Vec4,
-    forward: Vec4,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct LightData {
-    position: Vec4,
-    direction: Vec4,
-    color: Vec4,
-    cone: Vec4,
-    view_proj: [[f32; 4]; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct LightsData {
-    count: [u32; 4],
-    ambient: Vec4,
-    lights: [LightData; 8],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct MaterialData {
-    model: Mat4,
-    normal_matrix: Mat4,
-    albedo: Vec4,
-    params: Vec4,
-    sss: Vec4,
-}
 
 /// The settings the example's frame matches: the scene's own, with `diffusion`'s lateral
 /// taps and the bounce gathered per pixel (the transmitted map is a lower-rate evaluation inside
@@ -98,38 +67,6 @@ pub fn example_settings(scene: &Scene, width: u32, height: u32) -> RenderSetting
     s.sss.source_shift = false;
     s.sss.thin_parts = false;
     s
-}
-
-struct Mesh {
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    count: u32,
-    material: wgpu::BindGroup,
-}
-
-fn buffer(
-    device: &wgpu::Device,
-    label: &str,
-    bytes: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytes,
-        usage,
-    })
-}
-
-/// A bind group `label` of `layout` whose binding 0 is a uniform buffer holding `data` (the
-/// group keeps the buffer alive).
-fn uniform_group(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    data: &[u8],
-) -> wgpu::BindGroup {
-    let uniform = buffer(device, label, data, wgpu::BufferUsages::UNIFORM);
-    util::bind_group(device, label, layout, [(0, uniform.as_entire_binding())])
 }
 
 /// Renders `scene` at `settings`' size; with `skin`, through the library's skin passes.
@@ -158,62 +95,8 @@ pub fn render(
         label: Some("material"),
         entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
     });
-    let mut meshes = Vec::new();
-    let mut media: Vec<SkinMedium> = Vec::new();
-    let mut media_rows = Vec::new();
-    for (i, object) in scene.objects.iter().enumerate() {
-        if object.mesh.indices.is_empty() {
-            continue;
-        }
-        let field = format!("objects[{i}].material.medium");
-        let optics = cache.get(&object.material.medium, &field)?;
-        let row = profiles.object_rows[i];
-        let m = &object.material;
-        let albedo = Vec3::from(object.albedo) * Vec3::from(optics.diffuse_albedo);
-        let data = MaterialData {
-            model: object.transform,
-            normal_matrix: object.transform.inverse().transpose(),
-            albedo: albedo.extend(1.0),
-            params: Vec4::new(
-                m.roughness,
-                m.specular,
-                optics.dipole.eta as f32,
-                m.sss_strength,
-            ),
-            sss: Vec4::new(world_per_mm(object), row as f32, 0.0, 0.0),
-        };
-        let material = uniform_group(
-            device,
-            "material",
-            &material_layout,
-            bytemuck::bytes_of(&data),
-        );
-        meshes.push(Mesh {
-            vertices: buffer(
-                device,
-                "vertices",
-                bytemuck::cast_slice(&object.mesh.vertices),
-                wgpu::BufferUsages::VERTEX,
-            ),
-            indices: buffer(
-                device,
-                "indices",
-                bytemuck::cast_slice(&object.mesh.indices),
-                wgpu::BufferUsages::INDEX,
-            ),
-            count: object.mesh.indices.len() as u32,
-            material,
-        });
-        // The skin's media: one per profile row.
-        if m.sss_strength > 0.0 && !media_rows.contains(&row) {
-            media.push(SkinMedium::new(
-                ctx,
-                &optics,
-                object_uniform(object, &optics, 0.0, row),
-            )?);
-            media_rows.push(row);
-        }
-    }
+    let (meshes, media) =
+        forward::upload_objects(ctx, scene, &profiles, &mut cache, &material_layout)?;
 
     // The program's own shadow maps: a z-buffer per light, drawn with the lights' matrices.
     let atlas = setup.atlas_size;
@@ -228,30 +111,7 @@ pub fn render(
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
     );
     let shadow_array = util::array_view(&shadow_depth);
-    let mut lights = LightsData {
-        count: [lights_uniform.count, 0, 0, 0],
-        ambient: Vec3::from(settings.ambient).extend(0.0),
-        lights: bytemuck::Zeroable::zeroed(),
-    };
-    for (i, l) in lights_uniform
-        .lights
-        .iter()
-        .take(lights_uniform.count as usize)
-        .enumerate()
-    {
-        let size = setup
-            .layers
-            .iter()
-            .find(|s| s.light == i)
-            .map_or(1, |s| s.size);
-        lights.lights[i] = LightData {
-            position: Vec3::from(l.position).extend(l.kind),
-            direction: Vec3::from(l.direction).extend(l.first_layer),
-            color: Vec3::from(l.color).extend(l.shadow_bias),
-            cone: Vec4::new(l.cos_outer, l.cos_inner, size as f32, atlas as f32),
-            view_proj: l.view_proj[0],
-        };
-    }
+    let lights = forward::lights_data(&lights_uniform, &setup, settings.ambient);
     let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("view"),
         entries: &[
@@ -607,15 +467,6 @@ pub fn render(
         image,
         results.map_or_else(Vec::new, |r| timing::collect(&r)),
     ))
-}
-
-fn draw(pass: &mut wgpu::RenderPass<'_>, meshes: &[Mesh]) {
-    for m in meshes {
-        pass.set_bind_group(1, &m.material, &[]);
-        pass.set_vertex_buffer(0, m.vertices.slice(..));
-        pass.set_index_buffer(m.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..m.count, 0, 0..1);
-    }
 }
 
 #[allow(dead_code)]
