@@ -67,55 +67,36 @@ def walk(shape, radius, sigma_s, sigma_a, eta, photons, window, cone, seed, tilt
     n = photons
     sigma_t = sigma_s + sigma_a
     albedo = sigma_s / sigma_t
-    incident = np.tile([1.0, 0.0, 0.0], (n, 1))
     # Where the beam enters, and the outward normal there. Coordinates: u toward the front pole
     # (the camera), v across, w along a cylinder's axis.
-    if tilt_deg and shape != "slab":
+    if shape == "slab":
+        half = 8.0 * radius
+        v = rng.uniform(-half, half, n)
+        pos = np.stack([np.full(n, -radius), v, np.zeros(n)], 1)
+        beam_area, window_area = 2.0 * half, 2.0 * window
+        normal = np.tile([-1.0, 0.0, 0.0], (n, 1))
+        beam = np.array([1.0, 0.0, 0.0])
+    else:
         a = np.radians(tilt_deg)
         beam = np.array([np.cos(a), np.sin(a), 0.0])
         across = np.array([-np.sin(a), np.cos(a), 0.0])
         if shape == "cylinder":
             x, w = rng.uniform(-radius, radius, n), np.zeros(n)
-            beam_area = 2.0 * radius
+            beam_area, window_area = 2.0 * radius, 2.0 * window
         else:
             rr = radius * np.sqrt(rng.random(n))
             ph = rng.uniform(0.0, 2.0 * np.pi, n)
             x, w = rr * np.cos(ph), rr * np.sin(ph)
-            beam_area = np.pi * radius * radius
+            beam_area, window_area = np.pi * radius * radius, (2.0 * window) ** 2
         # The beam's line through (x across, w) meets the part first where it enters.
         q = x[:, None] * across[None, :] + w[:, None] * np.array([0.0, 0.0, 1.0])[None, :]
         axes = 2 if shape == "cylinder" else 3
         c = np.sum(q[:, :axes] ** 2, 1) - radius * radius
-        t0 = -np.sqrt(np.maximum(-c, 0.0))
-        pos = q + t0[:, None] * beam[None, :]
+        pos = q - np.sqrt(np.maximum(-c, 0.0))[:, None] * beam[None, :]
         normal = pos.copy()
-        if shape == "cylinder":
-            normal[:, 2] = 0.0
+        normal[:, axes:] = 0.0
         normal /= radius
-        window_area = 2.0 * window if shape == "cylinder" else (2.0 * window) ** 2
-        incident = np.tile(beam, (n, 1))
-        u, v = pos[:, 0], pos[:, 1]
-    elif shape == "slab":
-        half = 8.0 * radius
-        v = rng.uniform(-half, half, n)
-        w = np.zeros(n)
-        u = np.full(n, -radius)
-        beam_area, window_area = 2.0 * half, 2.0 * window
-        normal = np.tile([-1.0, 0.0, 0.0], (n, 1))
-    elif shape == "cylinder":
-        v = rng.uniform(-radius, radius, n)
-        w = np.zeros(n)
-        u = -np.sqrt(radius * radius - v * v)
-        beam_area, window_area = 2.0 * radius, 2.0 * window
-        normal = np.stack([u, v, w], 1) / radius
-    else:
-        rr = radius * np.sqrt(rng.random(n))
-        ph = rng.uniform(0.0, 2.0 * np.pi, n)
-        v, w = rr * np.cos(ph), rr * np.sin(ph)
-        u = -np.sqrt(np.maximum(radius * radius - rr * rr, 0.0))
-        beam_area, window_area = np.pi * radius * radius, (2.0 * window) ** 2
-        normal = np.stack([u, v, w], 1) / radius
-    pos = np.stack([u, v, w], 1)
+    incident = np.tile(beam, (n, 1))
     cos_i = -np.sum(incident * normal, 1)
     sin_t = np.sqrt(np.maximum(1.0 - cos_i * cos_i, 0.0)) / eta
     cos_t = np.sqrt(1.0 - sin_t * sin_t)
@@ -279,6 +260,17 @@ def renderer_centre(medium, shape, radius, extra, tilt_deg=0.0, at=0.0, window=N
     return img[rows, cols].reshape(-1, 3).mean(0)
 
 
+def renderer_args(a):
+    """--renderer-args as a tuple (renderer_centre's cache key)."""
+    return tuple(a.renderer_args.split()) if a.renderer_args else ()
+
+
+def renderer_ratio(medium, shape, radius, channel, extra):
+    """The renderer's middle of the part over that of the slab as thick as its diameter."""
+    q = renderer_centre(medium, "slab", radius, extra)[channel]
+    return float(renderer_centre(medium, shape, radius, extra)[channel] / q) if q > 0 else None
+
+
 def point(job):
     medium, shape, radius, channel, a, seed = job
     ss, sa, eta = MEDIA[medium]
@@ -288,10 +280,7 @@ def point(job):
     ratio_se = ratio * np.hypot(part_se / part, slab_se / slab) if ratio and part > 0 else None
     ours = None
     if a.renderer:
-        extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
-        p = renderer_centre(medium, shape, radius, extra)[channel]
-        q = renderer_centre(medium, "slab", radius, extra)[channel]
-        ours = float(p / q) if q > 0 else None
+        ours = renderer_ratio(medium, shape, radius, channel, renderer_args(a))
     return {"medium": medium, "shape": shape, "radius_mm": radius, "channel": "RGB"[channel],
             "sigma_s_prime": ss[channel], "sigma_a": sa[channel],
             "sigma_tr": float(np.sqrt(3 * sa[channel] * (sa[channel] + ss[channel]))),
@@ -305,9 +294,9 @@ def tilt_point(job):
     cases = [(0.0, 0.0)] + [(t, x) for t in tilts[1:] for x in a.at]
     walks = [walk(shape, radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone, seed, t, x)
              for t, x in cases]
-    extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
     ours = None
     if a.renderer:
+        extra = renderer_args(a)
         ours = [renderer_centre(medium, shape, radius, extra, t, x, a.window)[channel] for t, x in cases]
     return medium, shape, radius, channel, cases, walks, ours
 
@@ -347,12 +336,11 @@ def against(a):
     change to the renderer does to its agreement with the walk, in seconds."""
     with open(a.against) as f:
         doc = json.load(f)
-    extra = tuple(a.renderer_args.split()) if a.renderer_args else ()
+    extra = renderer_args(a)
     off = []
     for pt in doc["points"]:
         c = "RGB".index(pt["channel"])
-        q = renderer_centre(pt["medium"], "slab", pt["radius_mm"], extra)[c]
-        ours = float(renderer_centre(pt["medium"], pt["shape"], pt["radius_mm"], extra)[c] / q) if q > 0 else None
+        ours = renderer_ratio(pt["medium"], pt["shape"], pt["radius_mm"], c, extra)
         pt["renderer_ratio"] = ours
         walk_ratio, se = pt["ratio"], pt["ratio_stderr"]
         line = f"{pt['medium']:9} {pt['shape']:8} R {pt['radius_mm']:4.1f} mm {pt['channel']}  walk "

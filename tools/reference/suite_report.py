@@ -358,16 +358,13 @@ def report_changes(before, after, moved=0.02):
     L += ["", "| configuration | scene | part | region | before | after |", "|---|---|---|---|---:|---:|"]
     rows = []
     for cfg in after["summary"]:
-        for name, s in after["scenes"].items():
-            old = before["scenes"].get(name, {}).get("configs", {}).get(cfg)
-            if old is None:
-                continue
-            for r, g in s["configs"][cfg]["regions"].items():
-                e0, e1 = old["regions"].get(r, {}).get("error"), g["error"]
-                if e0 is None or e1 is None or g["stderr"] is None or g["stderr"] > REPORT_SE_MAX:
-                    continue
-                if abs(e1 - e0) > moved or (abs(e0) > 0.25) != (abs(e1) > 0.25):
-                    rows.append((abs(e1) - abs(e0), cfg, name, s["held_out"], r, e0, e1))
+        if cfg not in before["summary"]:
+            continue
+        was = {(n, r): e for n, r, e in report_rows(before["scenes"], cfg)}
+        for name, r, e1 in report_rows(after["scenes"], cfg):
+            e0 = was.get((name, r))
+            if e0 is not None and (abs(e1 - e0) > moved or (abs(e0) > 0.25) != (abs(e1) > 0.25)):
+                rows.append((abs(e1) - abs(e0), cfg, name, after["scenes"][name]["held_out"], r, e0, e1))
     for _, cfg, name, held, r, e0, e1 in sorted(rows):
         L.append(f"| `{cfg}` | {name} | {'held out' if held else 'tuning'} | {r} | {100 * e0:+.1f}% | {100 * e1:+.1f}% |")
     if not rows:
