@@ -334,8 +334,13 @@ def tilts(a):
 def against(a):
     """The renderer's part / slab at each point of a walk's table, without walking again: what a
     change to the renderer does to its agreement with the walk, in seconds."""
-    with open(a.against) as f:
-        doc = json.load(f)
+    try:
+        with open(a.against) as f:
+            doc = json.load(f)
+    except (OSError, ValueError) as e:
+        sys.exit(f"error: {a.against}: {e}")
+    if not isinstance(doc, dict) or not isinstance(doc.get("points"), list):
+        sys.exit(f"error: {a.against}: not a table of this tool's --out (no points)")
     extra = renderer_args(a)
     off = []
     for pt in doc["points"]:

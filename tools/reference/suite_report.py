@@ -236,6 +236,8 @@ def report_histogram(doc, path):
 def cmd_report(a, suite):
     if a.with_ and not a.out:
         sys.exit("error: --with: give --out too (the committed report is the defaults')")
+    # Read before the 70 s of rendering, so that a wrong path fails at once.
+    before = read_report(a.against) if a.against else None
     overrides = [arg for kv in a.with_ for arg in ("--set", kv)]
     exe = subsurface_bin()
     env = dict(os.environ)
@@ -334,9 +336,20 @@ def cmd_report(a, suite):
                             "calibration.png" if suite.name == "calibration" else "generalization.png")
     drawn = bool(hist) and report_histogram(doc, hist)
     print(f"wrote {out}" + (f", {hist}" if drawn else "") + f" ({doc['seconds']:.0f} s)", file=sys.stderr)
-    if a.against:
-        with open(a.against) as f:
-            print("\n".join(report_changes(json.load(f), doc, a.moved)))
+    if before is not None:
+        print("\n".join(report_changes(before, doc, a.moved)))
+
+
+def read_report(path):
+    """A report written by `report`, or a one-line exit naming the file."""
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+    except (OSError, ValueError) as e:
+        sys.exit(f"error: {path}: {e}")
+    if not isinstance(doc, dict) or "summary" not in doc or "scenes" not in doc:
+        sys.exit(f"error: {path}: not a report of suite.py report (no summary or scenes)")
+    return doc
 
 
 def report_changes(before, after, moved=0.02):
