@@ -487,12 +487,12 @@ fn tilted_slab_transmits(yaw_deg: f32, thickness_mm: f32) {
     s.desc.render.transmittance.lateral_taps = 0;
     let (diffuse, _) = render_diffuse(&s, 64, 64, TransmittanceMethod::Diffusion);
     // The entry texel is found along the ray through the point shrunk 0.1 mm along the normal:
-    // on a slope of angle a that entry is 0.1 sin a tan a nearer. The light flows halfway
-    // between the face's normal and the light's direction inside.
+    // on a slope of angle a that entry is 0.1 sin a tan a nearer. The light flows along the
+    // light's direction inside, bent toward the face's normal by 0.4 of it (`exit_flow`).
     let a = yaw_deg.to_radians();
     let n = glam::Vec3::new(a.sin(), 0.0, a.cos());
     let (v, l) = (glam::Vec3::Z, -glam::Vec3::Z);
-    let flow = (n - l).normalize();
+    let flow = (0.4 * n - l).normalize();
     let inside = -(-v).refract(n, 1.0 / SKIN1_ETA);
     let chord = thickness_mm / a.cos() - SHRINK * 1000.0 * a.sin() * a.tan();
     let entry = a.cos() * boundary_t(a.cos()) / boundary_t(1.0);
