@@ -156,7 +156,7 @@ fn transmitted_exit(s_mm: f32, n: vec3<f32>, v: vec3<f32>, flow: vec3<f32>) -> v
 // at a slant, and points past the terminator of a part lit from the side or off the axis read
 // 1.1-1.7x a random walk in the same media (tools/reference/confinement_mc.py, 108 windows
 // across 8 and 18 mm rods lit at 0, 35, 90 and 120 degrees: mean |log(renderer / walk)| 0.239;
-// the light's direction alone 0.192, weight 0.4 0.20). The path-traced rims of backlit parts
+// the light's direction alone 0.192, weight 0.4 0.202). The path-traced rims of backlit parts
 // (the canonical finger, sphere and hand) darken as the weight goes to 0 (-2 points at 0),
 // where the walk sees no difference; 0.4 is the smallest weight, in tenths, that leaves every
 // canonical region at every preset at least as far inside its target as weight 1 did
