@@ -5,6 +5,8 @@
         [--shapes cylinder,sphere] [--channels 0,1] [--photons 500000] [--out FILE.json]
     python3 tools/reference/confinement_mc.py --against references/confinement_mc.json [--out FILE.json]
     python3 tools/reference/confinement_mc.py --tilts 15,35 [--renderer] [--media ...] [--out FILE.json]
+    python3 tools/reference/confinement_mc.py --windows 90@0.5,120@0.8 [--renderer] [--media ...] [--out FILE.json]
+    python3 tools/reference/confinement_mc.py --against references/confinement_windows.json
 
 A Monte Carlo random walk (numpy) in a homogeneous medium with a smooth dielectric boundary
 and an isotropic phase function, sigma_s' used as sigma_s as the exporter does (similarity
@@ -331,6 +333,91 @@ def tilts(a):
             json.dump({"photons": a.photons, "window_mm": a.window, "cone": a.cone, "tilts": points}, f, indent=1)
 
 
+def window_job(job):
+    medium, radius, channel, cases, a, seed = job
+    ss, sa, eta = MEDIA[medium]
+    slab = walk("slab", radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone, seed)
+    walks = [walk("cylinder", radius, ss[channel], sa[channel], eta, a.photons, a.window, a.cone,
+                  seed + k + 1, t, x) for k, (t, x) in enumerate(cases)]
+    ours = renderer_windows(medium, radius, channel, cases, renderer_args(a), a.window) if a.renderer else None
+    return medium, radius, channel, cases, slab, walks, ours
+
+
+def renderer_windows(medium, radius, channel, cases, extra, window):
+    """The renderer's windows (tilt, at; `window` mm either side) of a cylinder, each over the
+    slab as thick as its diameter lit head-on; None where the slab is black."""
+    q = renderer_centre(medium, "slab", radius, extra)[channel]
+    if q <= 0:
+        return None
+    return [float(renderer_centre(medium, "cylinder", radius, extra, t, x, window)[channel] / q)
+            for t, x in cases]
+
+
+def print_window(w):
+    line = (f"{w['medium']:7} {w['channel']} {2 * w['radius_mm']:4.0f} mm  {w['tilt_deg']:4.0f} deg "
+            f"at {w['at_radii']:+.2f} R  walk {w['walk_ratio']:.3g} +- {w['walk_stderr']:.2g}")
+    if w.get("renderer_ratio") is not None and w["walk_ratio"] > 0:
+        line += f"  renderer {w['renderer_ratio']:.3g}  ({w['renderer_ratio'] / w['walk_ratio']:.2f}x)"
+    print(line, flush=True)
+
+
+def mean_log_off(ws):
+    """Mean |log(renderer / walk)| over the windows the walk knows to 10 %."""
+    off = [abs(np.log(w["renderer_ratio"] / w["walk_ratio"])) for w in ws
+           if w.get("renderer_ratio") and w["walk_ratio"] > 0 and w["walk_stderr"] < 0.1 * w["walk_ratio"]]
+    if off:
+        print(f"mean |log(renderer / walk)| over the {len(off)} windows the walk knows to 10 %: "
+              f"{sum(off) / len(off):.3f}")
+
+
+def windows(a):
+    """Windows across cylinders lit from any side (`--windows TILT@AT`: the beam turned TILT
+    degrees off the axis behind the part about its axis, past 90 from the camera's side; the
+    window AT radii across, + away from the light), each over a slab as thick as the diameter
+    lit head-on: absolute, so that the middle, the rims and the band past a side-lit
+    terminator are all checked, for the walk and (with --renderer) the renderer."""
+    try:
+        cases = [(float(t), float(x)) for t, x in (c.split("@") for c in a.windows.split(","))]
+    except ValueError:
+        sys.exit(f"error: --windows: expected TILT@AT pairs, e.g. 90@0.5,120@0.8 (got {a.windows!r})")
+    jobs = [(m, float(r), int(c), cases, a, 1000 * i)
+            for i, (m, r, c) in enumerate((m, r, c) for m in a.media.split(",")
+                                          for r in a.radii.split(",") for c in a.channels.split(","))]
+    out = []
+    with ProcessPoolExecutor(a.jobs) as ex:
+        for medium, radius, channel, cases, (s0, e0), walks, ours in ex.map(window_job, jobs):
+            for k, ((t, x), (wk, ek)) in enumerate(zip(cases, walks)):
+                ratio = wk / s0 if s0 > 0 else 0.0
+                se = ratio * np.hypot(ek / wk, e0 / s0) if wk > 0 and s0 > 0 else 0.0
+                w = {"medium": medium, "shape": "cylinder", "radius_mm": radius, "channel": "RGB"[channel],
+                     "tilt_deg": t, "at_radii": x, "walk_ratio": ratio, "walk_stderr": se,
+                     "renderer_ratio": None if ours is None else ours[k]}
+                out.append(w)
+                print_window(w)
+    mean_log_off(out)
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump({"photons": a.photons, "window_mm": a.window, "cone": a.cone, "windows": out}, f, indent=1)
+
+
+def against_windows(a, doc):
+    """`--against` for a table of `--windows`: each rod's slab rendered once, then its windows."""
+    extra = renderer_args(a)
+    groups = {}
+    for w in doc["windows"]:
+        groups.setdefault((w["medium"], w["radius_mm"], w["channel"]), []).append(w)
+    for (medium, radius, ch), ws in groups.items():
+        cases = [(w["tilt_deg"], w["at_radii"]) for w in ws]
+        ours = renderer_windows(medium, radius, "RGB".index(ch), cases, extra, doc.get("window_mm", 0.5))
+        for k, w in enumerate(ws):
+            w["renderer_ratio"] = None if ours is None else ours[k]
+            print_window(w)
+    mean_log_off(doc["windows"])
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(doc, f, indent=1)
+
+
 def against(a):
     """The renderer's part / slab at each point of a walk's table, without walking again: what a
     change to the renderer does to its agreement with the walk, in seconds."""
@@ -339,8 +426,10 @@ def against(a):
             doc = json.load(f)
     except (OSError, ValueError) as e:
         sys.exit(f"error: {a.against}: {e}")
+    if isinstance(doc, dict) and isinstance(doc.get("windows"), list):
+        return against_windows(a, doc)
     if not isinstance(doc, dict) or not isinstance(doc.get("points"), list):
-        sys.exit(f"error: {a.against}: not a table of this tool's --out (no points)")
+        sys.exit(f"error: {a.against}: not a table of this tool's --out (no points or windows)")
     extra = renderer_args(a)
     off = []
     for pt in doc["points"]:
@@ -390,15 +479,22 @@ def main():
                         "moves off the axis behind it")
     p.add_argument("--at", default="0", help="with --tilts: where the window lies across the part, in radii "
                    "(comma-separated; 0 the pole, + away from the light)")
+    p.add_argument("--windows", metavar="TILT@AT,..",
+                   help="instead of part / slab at the pole: windows across cylinders lit from any side, "
+                        "the beam TILT degrees off the axis behind the part (past 90 from the camera's side), "
+                        "the window AT radii across (+ away from the light), each over the slab as thick as "
+                        "the diameter lit head-on, for the walk and (with --renderer) the renderer")
     a = p.parse_args()
     a.at = [float(x) for x in a.at.split(",")]
     if a.against:
         return against(a)
-    if a.tilts:
-        return tilts(a)
     for m in a.media.split(","):
         if m not in MEDIA:
             sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
+    if a.windows:
+        return windows(a)
+    if a.tilts:
+        return tilts(a)
     jobs = [(m, s, float(r), int(c), a, 1000 * i)
             for i, (m, s, r, c) in enumerate((m, s, r, c) for m in a.media.split(",")
                                              for s in a.shapes.split(",") for r in a.radii.split(",")
