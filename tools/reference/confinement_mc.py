@@ -404,8 +404,14 @@ def against_windows(a, doc):
     """`--against` for a table of `--windows`: each rod's slab rendered once, then its windows."""
     extra = renderer_args(a)
     groups = {}
-    for w in doc["windows"]:
-        groups.setdefault((w["medium"], w["radius_mm"], w["channel"]), []).append(w)
+    try:
+        for w in doc["windows"]:
+            if w["medium"] not in MEDIA or w["channel"] not in ("R", "G", "B"):
+                raise ValueError(f"unknown medium or channel {w['medium']!r} {w['channel']!r}")
+            float(w["radius_mm"]), float(w["tilt_deg"]), float(w["at_radii"]), float(w["walk_ratio"]), float(w["walk_stderr"])
+            groups.setdefault((w["medium"], w["radius_mm"], w["channel"]), []).append(w)
+    except (KeyError, TypeError, ValueError) as e:
+        sys.exit(f"error: {a.against}: a window without its medium, channel, radius, tilt, place or walk ({e})")
     for (medium, radius, ch), ws in groups.items():
         cases = [(w["tilt_deg"], w["at_radii"]) for w in ws]
         ours = renderer_windows(medium, radius, "RGB".index(ch), cases, extra, doc.get("window_mm", 0.5))
