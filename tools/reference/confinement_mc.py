@@ -306,11 +306,8 @@ def tilt_point(job):
 def tilts(a):
     """Each part's middle (or the windows `--at` across it) lit off the axis over its middle lit
     on it, the walk's and the renderer's."""
-    angles = [0.0] + [float(t) for t in a.tilts.split(",") if float(t) != 0.0]
-    jobs = [(m, sh, float(r), int(c), angles, a, 1000 * i)
-            for i, (m, sh, r, c) in enumerate((m, sh, r, c) for m in a.media.split(",")
-                                              for sh in a.shapes.split(",") for r in a.radii.split(",")
-                                              for c in a.channels.split(","))]
+    angles = [0.0] + [t for t in a.tilts if t != 0.0]
+    jobs = [(m, sh, r, c, angles, a, seed) for m, sh, r, c, seed in grid(a, a.shapes)]
     points = []
     with ProcessPoolExecutor(a.jobs) as ex:
         for medium, shape, radius, channel, cases, walks, ours in ex.map(tilt_point, jobs):
@@ -376,13 +373,7 @@ def windows(a):
     window AT radii across, + away from the light), each over a slab as thick as the diameter
     lit head-on: absolute, so that the middle, the rims and the band past a side-lit
     terminator are all checked, for the walk and (with --renderer) the renderer."""
-    try:
-        cases = [(float(t), float(x)) for t, x in (c.split("@") for c in a.windows.split(","))]
-    except ValueError:
-        sys.exit(f"error: --windows: expected TILT@AT pairs, e.g. 90@0.5,120@0.8 (got {a.windows!r})")
-    jobs = [(m, float(r), int(c), cases, a, 1000 * i)
-            for i, (m, r, c) in enumerate((m, r, c) for m in a.media.split(",")
-                                          for r in a.radii.split(",") for c in a.channels.split(","))]
+    jobs = [(m, r, c, a.windows, a, seed) for m, _, r, c, seed in grid(a, ["cylinder"])]
     out = []
     with ProcessPoolExecutor(a.jobs) as ex:
         for medium, radius, channel, cases, (s0, e0), walks, ours in ex.map(window_job, jobs):
@@ -459,6 +450,43 @@ def against(a):
             json.dump(doc, f, indent=1)
 
 
+def parse_lists(a):
+    """The comma-separated options as lists, each bad value a one-line error naming its option."""
+    def numbers(option, text, kind=float):
+        try:
+            return [kind(x) for x in text.split(",")]
+        except ValueError:
+            sys.exit(f"error: --{option}: expected comma-separated numbers (got {text!r})")
+    a.media = a.media.split(",")
+    for m in a.media:
+        if m not in MEDIA:
+            sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
+    a.shapes = a.shapes.split(",")
+    for sh in a.shapes:
+        if sh not in ("slab", "cylinder", "sphere"):
+            sys.exit(f"error: --shapes: unknown shape {sh!r} (known: slab, cylinder, sphere)")
+    a.radii = numbers("radii", a.radii)
+    if any(not r > 0 for r in a.radii):
+        sys.exit(f"error: --radii: every radius must be above 0 mm (got {a.radii})")
+    a.channels = numbers("channels", a.channels, int)
+    if any(c not in (0, 1, 2) for c in a.channels):
+        sys.exit(f"error: --channels: 0 (red), 1 (green) or 2 (blue) (got {a.channels})")
+    a.at = numbers("at", a.at)
+    if a.tilts:
+        a.tilts = numbers("tilts", a.tilts)
+    if a.windows:
+        try:
+            a.windows = [(float(t), float(x)) for t, x in (c.split("@") for c in a.windows.split(","))]
+        except ValueError:
+            sys.exit(f"error: --windows: expected TILT@AT pairs, e.g. 90@0.5,120@0.8 (got {a.windows!r})")
+
+
+def grid(a, shapes):
+    """(medium, shape, radius, channel, seed) over the options' grid, each job its own seed."""
+    return [(m, sh, r, c, 1000 * i) for i, (m, sh, r, c) in
+            enumerate((m, sh, r, c) for m in a.media for sh in shapes for r in a.radii for c in a.channels)]
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--media", default="skin1,skin2")
@@ -491,20 +519,14 @@ def main():
                         "the window AT radii across (+ away from the light), each over the slab as thick as "
                         "the diameter lit head-on, for the walk and (with --renderer) the renderer")
     a = p.parse_args()
-    a.at = [float(x) for x in a.at.split(",")]
+    parse_lists(a)
     if a.against:
         return against(a)
-    for m in a.media.split(","):
-        if m not in MEDIA:
-            sys.exit(f"error: --media: unknown medium {m!r} (known: {', '.join(MEDIA)})")
     if a.windows:
         return windows(a)
     if a.tilts:
         return tilts(a)
-    jobs = [(m, s, float(r), int(c), a, 1000 * i)
-            for i, (m, s, r, c) in enumerate((m, s, r, c) for m in a.media.split(",")
-                                             for s in a.shapes.split(",") for r in a.radii.split(",")
-                                             for c in a.channels.split(","))]
+    jobs = [(m, sh, r, c, a, seed) for m, sh, r, c, seed in grid(a, a.shapes)]
     points = []
     with ProcessPoolExecutor(a.jobs) as ex:
         for pt in ex.map(point, jobs):

@@ -90,10 +90,19 @@ fn middle_of(scene: &Scene, shape: &str, side_walls: bool) -> [f32; 3] {
         s.transmittance.side_walls = side_walls;
     });
     let rows = if shape == "cylinder" { 32..96 } else { 60..68 };
+    mean_over(&d, rows, 60..68)
+}
+
+/// The mean of a 128-pixel-wide target over `rows` x `cols`, channel by channel.
+fn mean_over(
+    d: &[[f32; 4]],
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> [f32; 3] {
     let mut sum = [0.0f64; 3];
     let mut n = 0.0;
     for y in rows {
-        for x in 60..68 {
+        for x in cols.clone() {
             for (c, s) in sum.iter_mut().enumerate() {
                 *s += f64::from(d[y * 128 + x][c]);
             }
@@ -231,18 +240,11 @@ fn rod_window(scene: &Scene, r_mm: f32, at: f32) -> [f32; 3] {
     });
     // 32 pixels a radius (the frame spans 4 radii), as confinement_mc.py's renderer_centre.
     let (x, w) = (64.0 + 32.0 * at, (32.0 * 0.5 / r_mm).max(0.5));
-    let cols = (x - w).round() as usize..(x + w).round() as usize;
-    let mut sum = [0.0f64; 3];
-    let mut n = 0.0;
-    for y in 32..96 {
-        for x in cols.clone() {
-            for (c, s) in sum.iter_mut().enumerate() {
-                *s += f64::from(d[y * 128 + x][c]);
-            }
-            n += 1.0;
-        }
-    }
-    sum.map(|s| (s / n) as f32)
+    mean_over(
+        &d,
+        32..96,
+        (x - w).round() as usize..(x + w).round() as usize,
+    )
 }
 
 /// Past the terminator of a rod lit from the side (90 degrees off the axis behind it) or from
